@@ -1,0 +1,25 @@
+# Turns every kernels/*.cl into one C++ source holding the kernel texts as raw strings,
+# so the library carries its kernels and never reads them from disk at run time.
+# Invoked by the build with -DKERNEL_DIR=... -DOUTPUT=... -DSOURCES=a.cl,b.cl
+string(REPLACE "," ";" SOURCES "${SOURCES}")
+set(body "// Generated from kernels/*.cl by cmake/embed_kernels.cmake. Do not edit.\n")
+string(APPEND body "#include \"nova/kernel_sources.hpp\"\n\nnamespace nova {\n\n")
+string(APPEND body "const std::vector<KernelSource>& kernel_sources() {\n")
+string(APPEND body "  static const std::vector<KernelSource> sources = {\n")
+foreach(src IN LISTS SOURCES)
+  get_filename_component(family "${src}" NAME_WE)
+  file(READ "${KERNEL_DIR}/${src}" text)
+  string(FIND "${text}" ")NOVACL\"" clash)
+  if(NOT clash EQUAL -1)
+    message(FATAL_ERROR "${src} contains the raw-string delimiter )NOVACL\"")
+  endif()
+  string(APPEND body "    {\"${family}\", R\"NOVACL(${text})NOVACL\"},\n")
+endforeach()
+string(APPEND body "  };\n  return sources;\n}\n\n}  // namespace nova\n")
+# Write only when changed so that an unchanged kernel set does not rebuild the library.
+if(EXISTS "${OUTPUT}")
+  file(READ "${OUTPUT}" old)
+endif()
+if(NOT "${old}" STREQUAL "${body}")
+  file(WRITE "${OUTPUT}" "${body}")
+endif()

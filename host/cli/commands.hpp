@@ -1,0 +1,23 @@
+#pragma once
+// The `nova` subcommands. Each takes the arguments after its name and returns an exit code;
+// errors are thrown as nova::Error and reported by main().
+#include <string>
+#include <vector>
+
+namespace nova::cli {
+
+using Args = std::vector<std::string>;
+
+int devices(const Args& args);
+int train_mlp(const Args& args);
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const Args&);
+};
+
+// All subcommands, in the order `nova --help` lists them.
+const std::vector<Command>& commands();
+
+}  // namespace nova::cli

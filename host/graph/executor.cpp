@@ -1,0 +1,379 @@
+#include "nova/executor.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+namespace nova {
+
+// ---- ExecContext -----------------------------------------------------------------------------
+
+cl_mem ExecContext::in(size_t i) const { return ex_.values_.at(op_.inputs().at(i)).get(); }
+cl_mem ExecContext::out(size_t i) const { return ex_.values_.at(op_.outputs().at(i)).get(); }
+const Shape& ExecContext::in_shape(size_t i) const {
+  return ex_.graph_.tensor(op_.inputs().at(i)).shape;
+}
+const Shape& ExecContext::out_shape(size_t i) const {
+  return ex_.graph_.tensor(op_.outputs().at(i)).shape;
+}
+cl_mem ExecContext::grad_out(size_t i) const {
+  const TensorId t = op_.outputs().at(i);
+  return ex_.has_grad_[t] ? ex_.grads_[t].get() : nullptr;
+}
+cl_mem ExecContext::grad_in(size_t i) const {
+  const TensorId t = op_.inputs().at(i);
+  return ex_.has_grad_[t] ? ex_.grads_[t].get() : nullptr;
+}
+bool ExecContext::accumulate_in(size_t i) const { return ex_.accumulate_.at(node_).at(i); }
+
+// ---- schedule and memory ---------------------------------------------------------------------
+
+Executor::Executor(Runtime& rt, Graph& graph, ExecutorOptions options)
+    : rt_(rt), graph_(graph), options_(options) {
+  build_schedule();
+  allocate();
+  init_parameters(options.seed);
+}
+
+void Executor::build_schedule() {
+  const size_t nt = graph_.tensor_count();
+  const int nn = static_cast<int>(graph_.node_count());
+  has_grad_.assign(nt, false);
+  accumulate_.assign(nn, {});
+  for (int n = 0; n < nn; ++n) accumulate_[n].assign(graph_.node(n).inputs().size(), false);
+  const Tensor loss = graph_.loss();
+  if (!loss.valid()) return;
+
+  // Tensors on a path to the loss; among them, those that need a gradient.
+  std::vector<bool> on_path(nt, false);
+  on_path[loss.id] = true;
+  for (int n = nn - 1; n >= 0; --n) {
+    const Op& op = graph_.node(n);
+    const bool feeds_loss = std::any_of(op.outputs().begin(), op.outputs().end(),
+                                        [&](TensorId t) { return on_path[t]; });
+    if (feeds_loss)
+      for (TensorId t : op.inputs()) on_path[t] = true;
+  }
+  for (size_t t = 0; t < nt; ++t) has_grad_[t] = on_path[t] && graph_.tensor(t).requires_grad;
+
+  for (int n = nn - 1; n >= 0; --n) {
+    const Op& op = graph_.node(n);
+    if (std::any_of(op.outputs().begin(), op.outputs().end(),
+                    [&](TensorId t) { return has_grad_[t]; }))
+      backward_nodes_.push_back(n);
+  }
+  // The first writer of a gradient (in backward order) overwrites, later ones add.
+  std::vector<bool> written(nt, false);
+  for (int n : backward_nodes_) {
+    const auto& ins = graph_.node(n).inputs();
+    for (size_t s = 0; s < ins.size(); ++s) {
+      if (!has_grad_[ins[s]]) continue;
+      accumulate_[n][s] = written[ins[s]];
+      written[ins[s]] = true;
+    }
+  }
+}
+
+void Executor::allocate() {
+  const size_t nt = graph_.tensor_count();
+  const int nn = static_cast<int>(graph_.node_count());
+  const int nb = static_cast<int>(backward_nodes_.size());
+  // Steps: forward nodes 0..nn-1, the loss-gradient seed at nn, backward nodes after it.
+  const int seed_step = nn;
+  const int end_step = nn + 1 + nb;
+  std::vector<int> bwd_step(nn, -1);
+  for (int j = 0; j < nb; ++j) bwd_step[backward_nodes_[j]] = nn + 1 + j;
+
+  std::vector<Lifetime> lives;
+  std::vector<std::pair<int, int>> owner;  // (kind, index): 0 value, 1 grad, 2 fwd ws, 3 bwd ws
+  std::vector<int> last_value(nt, -1);
+  for (size_t t = 0; t < nt; ++t) {
+    const TensorInfo& info = graph_.tensor(t);
+    if (info.role == TensorRole::Parameter) continue;
+    int first = info.role == TensorRole::Input ? 0 : info.producer;
+    int last = first;
+    for (int c : info.consumers) last = std::max(last, c);
+    if (info.keep || info.role == TensorRole::Input) last = end_step;
+    last_value[t] = last;
+  }
+  for (int n = 0; n < nn; ++n) {
+    if (bwd_step[n] < 0) continue;
+    for (TensorId t : graph_.node(n).saved_for_backward())
+      if (graph_.tensor(t).role != TensorRole::Parameter)
+        last_value[t] = std::max(last_value[t], bwd_step[n]);
+  }
+  for (size_t t = 0; t < nt; ++t) {
+    const TensorInfo& info = graph_.tensor(t);
+    if (info.role == TensorRole::Parameter) continue;
+    const size_t bytes = info.shape.numel() * sizeof(float);
+    lives.push_back({bytes, info.role == TensorRole::Input ? 0 : info.producer, last_value[t]});
+    owner.push_back({0, static_cast<int>(t)});
+    if (!has_grad_[t]) continue;
+    // A gradient lives from its first writer (or the seed) to its producer's backward.
+    int first = end_step;
+    for (int c : info.consumers)
+      if (bwd_step[c] >= 0) first = std::min(first, bwd_step[c]);
+    if (static_cast<TensorId>(t) == graph_.loss().id) first = seed_step;
+    const int last = info.producer >= 0 && !info.keep ? bwd_step[info.producer] : end_step;
+    lives.push_back({bytes, first, std::max(first, last)});
+    owner.push_back({1, static_cast<int>(t)});
+  }
+  for (int n = 0; n < nn; ++n) {
+    if (size_t ws = graph_.node(n).workspace_bytes(rt_, Pass::Forward)) {
+      lives.push_back({ws, n, n});
+      owner.push_back({2, n});
+    }
+    if (bwd_step[n] >= 0)
+      if (size_t ws = graph_.node(n).workspace_bytes(rt_, Pass::Backward)) {
+        lives.push_back({ws, bwd_step[n], bwd_step[n]});
+        owner.push_back({3, n});
+      }
+  }
+
+  const size_t align = std::max<size_t>(rt_.info().base_addr_align_bytes, 256);
+  plan_ = plan_memory(lives, align);
+  if (plan_.peak_bytes > rt_.info().max_alloc_bytes)
+    throw Error("the graph needs " + std::to_string(plan_.peak_bytes >> 20) +
+                    " MiB in one buffer, more than " + rt_.info().name + " allows (" +
+                    std::to_string(rt_.info().max_alloc_bytes >> 20) +
+                    " MiB): use a smaller batch",
+                kExitUsage);
+  arena_ = rt_.alloc(plan_.peak_bytes);
+  values_.resize(nt);
+  grads_.resize(nt);
+  fwd_workspace_.resize(nn);
+  bwd_workspace_.resize(nn);
+  for (size_t i = 0; i < lives.size(); ++i) {
+    Buffer b = rt_.sub_buffer(arena_, plan_.offsets[i], lives[i].bytes);
+    auto [kind, index] = owner[i];
+    (kind == 0 ? values_ : kind == 1 ? grads_ : kind == 2 ? fwd_workspace_ : bwd_workspace_)[index] =
+        std::move(b);
+  }
+
+  // Parameters and their gradients: two arenas with the same layout.
+  const size_t align_floats = align / sizeof(float);
+  std::vector<size_t> offsets(nt, 0);
+  size_t floats = 0;
+  for (size_t t = 0; t < nt; ++t) {
+    if (graph_.tensor(t).role != TensorRole::Parameter) continue;
+    offsets[t] = floats;
+    floats += (graph_.tensor(t).shape.numel() + align_floats - 1) / align_floats * align_floats;
+  }
+  param_arena_floats_ = floats;
+  if (floats == 0) return;
+  param_arena_ = rt_.alloc(floats * sizeof(float));
+  grad_arena_ = rt_.alloc(floats * sizeof(float));
+  rt_.fill_zero(param_arena_.get(), floats * sizeof(float));
+  rt_.fill_zero(grad_arena_.get(), floats * sizeof(float));
+  for (size_t t = 0; t < nt; ++t) {
+    if (graph_.tensor(t).role != TensorRole::Parameter) continue;
+    const size_t bytes = graph_.tensor(t).shape.numel() * sizeof(float);
+    values_[t] = rt_.sub_buffer(param_arena_, offsets[t] * sizeof(float), bytes);
+    grads_[t] = rt_.sub_buffer(grad_arena_, offsets[t] * sizeof(float), bytes);
+  }
+}
+
+void Executor::init_parameters(unsigned seed) {
+  std::mt19937 rng(seed);
+  for (Tensor p : graph_.parameters()) {
+    const float bound = p.info().init.bound;
+    std::vector<float> v(p.shape().numel(), 0.0f);
+    std::uniform_real_distribution<float> u(-bound, bound);
+    if (bound > 0)
+      for (float& x : v) x = u(rng);
+    set(p, v);
+  }
+}
+
+size_t Executor::parameter_count() const {
+  size_t n = 0;
+  for (size_t t = 0; t < graph_.tensor_count(); ++t)
+    if (graph_.tensor(t).role == TensorRole::Parameter) n += graph_.tensor(t).shape.numel();
+  return n;
+}
+
+// ---- running ---------------------------------------------------------------------------------
+
+namespace {
+cl_ulong event_end(cl_event e) {
+  cl_ulong t = 0;
+  cl_check(clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_END, sizeof(t), &t, nullptr),
+           "clGetEventProfilingInfo");
+  return t;
+}
+}  // namespace
+
+void Executor::run_node(int n, Pass pass) {
+  Op& op = graph_.node(n);
+  ExecContext ctx(rt_, *this, op, n,
+                  (pass == Pass::Forward ? fwd_workspace_ : bwd_workspace_)[n].get());
+  if (pass == Pass::Forward)
+    op.forward(ctx);
+  else
+    op.backward(ctx);
+  if (options_.check_finite) check_finite(n, pass);
+}
+
+void Executor::forward() {
+  const int nn = static_cast<int>(graph_.node_count());
+  if (options_.check_finite)
+    for (size_t t = 0; t < graph_.tensor_count(); ++t)
+      if (graph_.tensor(t).role == TensorRole::Input) {
+        const auto v = get(graph_.handle(static_cast<TensorId>(t)));
+        for (size_t i = 0; i < v.size(); ++i)
+          if (!std::isfinite(v[i]))
+            throw Error("input '" + graph_.tensor(t).name + "' holds a non-finite value at " +
+                        std::to_string(i));
+      }
+  const bool timed = options_.profile && rt_.profiling();
+  std::vector<cl_event> marks;
+  const auto mark = [&] {
+    cl_event e;
+    cl_check(clEnqueueMarkerWithWaitList(rt_.queue(), 0, nullptr, &e), "clEnqueueMarker");
+    marks.push_back(e);
+  };
+  if (timed) mark();
+  for (int n = 0; n < nn; ++n) {
+    run_node(n, Pass::Forward);
+    if (timed) mark();
+  }
+  if (timed) {
+    rt_.finish();
+    for (int n = 0; n < nn; ++n) {
+      auto& t = timings_[graph_.node(n).type()];
+      t.type = graph_.node(n).type();
+      t.calls++;
+      t.ms += (event_end(marks[n + 1]) - event_end(marks[n])) * 1e-6;
+    }
+    for (cl_event e : marks) clReleaseEvent(e);
+  }
+  forward_done_ = true;
+}
+
+void Executor::backward() {
+  const Tensor loss = graph_.loss();
+  if (!loss.valid()) throw Error("backward() on a graph without a loss", kExitInternal);
+  if (!forward_done_) throw Error("backward() before forward()", kExitInternal);
+  forward_done_ = false;
+  if (!has_grad_[loss.id]) return;  // the loss depends on no parameter
+  const float one = 1.0f;
+  rt_.upload(grads_[loss.id].get(), &one, sizeof(one));
+  const bool timed = options_.profile && rt_.profiling();
+  std::vector<cl_event> marks;
+  const auto mark = [&] {
+    cl_event e;
+    cl_check(clEnqueueMarkerWithWaitList(rt_.queue(), 0, nullptr, &e), "clEnqueueMarker");
+    marks.push_back(e);
+  };
+  if (timed) mark();
+  for (int n : backward_nodes_) {
+    run_node(n, Pass::Backward);
+    if (timed) mark();
+  }
+  if (timed) {
+    rt_.finish();
+    for (size_t j = 0; j < backward_nodes_.size(); ++j) {
+      const std::string type = graph_.node(backward_nodes_[j]).type() + " (backward)";
+      auto& t = timings_[type];
+      t.type = type;
+      t.calls++;
+      t.ms += (event_end(marks[j + 1]) - event_end(marks[j])) * 1e-6;
+    }
+    for (cl_event e : marks) clReleaseEvent(e);
+  }
+}
+
+void Executor::check_finite(int n, Pass pass) {
+  const Op& op = graph_.node(n);
+  const auto check = [&](TensorId t, cl_mem m, const char* what) {
+    const size_t count = graph_.tensor(t).shape.numel();
+    const auto v = rt_.download_floats(m, count);
+    for (size_t i = 0; i < count; ++i)
+      if (!std::isfinite(v[i])) {
+        std::ostringstream s;
+        s << "non-finite value " << v[i] << " at element " << i << " of " << what << " '"
+          << graph_.tensor(t).name << "' after the " << (pass == Pass::Forward ? "forward" : "backward")
+          << " of op '" << op.type() << "' (node " << n << ")";
+        throw Error(s.str(), kExitInternal);
+      }
+  };
+  if (pass == Pass::Forward) {
+    for (TensorId t : op.outputs()) check(t, values_[t].get(), "tensor");
+  } else {
+    for (TensorId t : op.inputs())
+      if (has_grad_[t]) check(t, grads_[t].get(), "the gradient of");
+  }
+}
+
+// ---- host access -----------------------------------------------------------------------------
+
+void Executor::set(Tensor t, const float* values, size_t count) {
+  const TensorInfo& info = graph_.tensor(t.id);
+  if (count != info.shape.numel())
+    throw Error("tensor '" + info.name + "' has shape " + info.shape.str() + " (" +
+                    std::to_string(info.shape.numel()) + " values) but " + std::to_string(count) +
+                    " were given",
+                kExitInternal);
+  rt_.upload(values_[t.id].get(), values, count * sizeof(float));
+}
+
+void Executor::set(Tensor t, const std::vector<float>& values) {
+  set(t, values.data(), values.size());
+}
+
+std::vector<float> Executor::get(Tensor t) {
+  const TensorInfo& info = graph_.tensor(t.id);
+  if (info.role == TensorRole::Activation && !info.keep)
+    throw Error("tensor '" + info.name + "' is not kept after a run (Graph::keep)", kExitInternal);
+  return rt_.download_floats(values_[t.id].get(), info.shape.numel());
+}
+
+std::vector<float> Executor::get_grad(Tensor t) {
+  const TensorInfo& info = graph_.tensor(t.id);
+  const bool readable = info.role == TensorRole::Parameter ||
+                        (info.role == TensorRole::Input && has_grad_[t.id]);
+  if (!readable || !grads_[t.id])
+    throw Error("tensor '" + info.name + "' has no gradient to read", kExitInternal);
+  return rt_.download_floats(grads_[t.id].get(), info.shape.numel());
+}
+
+cl_mem Executor::buffer(Tensor t) const { return values_.at(t.id).get(); }
+cl_mem Executor::grad_buffer(Tensor t) const {
+  return has_grad_.at(t.id) || graph_.tensor(t.id).role == TensorRole::Parameter
+             ? grads_.at(t.id).get()
+             : nullptr;
+}
+
+float Executor::loss() {
+  const Tensor l = graph_.loss();
+  if (!l.valid()) throw Error("the graph has no loss", kExitInternal);
+  return get(l).at(0);
+}
+
+std::vector<OpTiming> Executor::timings() const {
+  std::vector<OpTiming> v;
+  for (const auto& [k, t] : timings_) v.push_back(t);
+  std::sort(v.begin(), v.end(), [](const OpTiming& a, const OpTiming& b) { return a.ms > b.ms; });
+  return v;
+}
+
+std::string Executor::profile_table() const {
+  const auto v = timings();
+  double total = 0;
+  for (const auto& t : v) total += t.ms;
+  std::ostringstream s;
+  s << std::left << std::setw(28) << "op" << std::right << std::setw(8) << "calls"
+    << std::setw(12) << "total ms" << std::setw(9) << "share" << "\n";
+  for (const auto& t : v)
+    s << std::left << std::setw(28) << t.type << std::right << std::setw(8) << t.calls
+      << std::setw(12) << std::fixed << std::setprecision(2) << t.ms << std::setw(8)
+      << std::setprecision(1) << (total > 0 ? 100.0 * t.ms / total : 0.0) << "%\n";
+  s << std::left << std::setw(28) << "total" << std::right << std::setw(8) << "" << std::setw(12)
+    << std::fixed << std::setprecision(2) << total << "\n";
+  return s.str();
+}
+
+}  // namespace nova

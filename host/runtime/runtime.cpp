@@ -1,0 +1,204 @@
+// Context, queue, program cache and buffers of one device.
+#include <algorithm>
+#include <cstring>
+
+#include "nova/kernel_sources.hpp"
+#include "nova/runtime.hpp"
+
+namespace nova {
+
+void cl_check(cl_int status, const char* call) {
+  if (status != CL_SUCCESS) throw ClError(call, status);
+}
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+  if (this != &o) {
+    if (mem_) clReleaseMemObject(mem_);
+    mem_ = std::exchange(o.mem_, nullptr);
+    bytes_ = std::exchange(o.bytes_, 0);
+  }
+  return *this;
+}
+
+Buffer::~Buffer() {
+  if (mem_) clReleaseMemObject(mem_);
+}
+
+Runtime::Runtime(const DeviceInfo& device, bool profiling) : info_(device), profiling_(profiling) {
+  cl_int st = CL_SUCCESS;
+  const cl_context_properties props[] = {
+      CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(info_.platform), 0};
+  context_ = clCreateContext(props, 1, &info_.device, nullptr, nullptr, &st);
+  cl_check(st, "clCreateContext");
+  // One in-order queue: ops run in graph order without explicit events between them.
+  queue_ = clCreateCommandQueue(context_, info_.device,
+                                profiling ? CL_QUEUE_PROFILING_ENABLE : 0, &st);
+  cl_check(st, "clCreateCommandQueue");
+}
+
+Runtime::~Runtime() {
+  if (queue_) clFinish(queue_);
+  for (auto& [key, k] : kernels_) clReleaseKernel(k);
+  for (auto& [key, p] : programs_) clReleaseProgram(p);
+  if (queue_) clReleaseCommandQueue(queue_);
+  if (context_) clReleaseContext(context_);
+}
+
+cl_program Runtime::build_program(const std::string& family, const std::string& options) {
+  const auto& sources = kernel_sources();
+  const auto it = std::find_if(sources.begin(), sources.end(),
+                               [&](const KernelSource& s) { return s.family == family; });
+  if (it == sources.end()) throw Error("no embedded kernel family '" + family + "'", kExitInternal);
+  const char* text = it->source.data();
+  const size_t length = it->source.size();
+  cl_int st = CL_SUCCESS;
+  cl_program program = clCreateProgramWithSource(context_, 1, &text, &length, &st);
+  cl_check(st, "clCreateProgramWithSource");
+  const std::string opts = "-cl-std=CL1.2 " + options;
+  st = clBuildProgram(program, 1, &info_.device, opts.c_str(), nullptr, nullptr);
+  if (st != CL_SUCCESS) {
+    size_t n = 0;
+    clGetProgramBuildInfo(program, info_.device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &n);
+    std::string log(n, '\0');
+    clGetProgramBuildInfo(program, info_.device, CL_PROGRAM_BUILD_LOG, n, log.data(), nullptr);
+    clReleaseProgram(program);
+    throw Error("kernels/" + family + ".cl failed to build (" + cl_status_name(st) +
+                    ") with options '" + opts + "':\n" + log,
+                kExitInternal);
+  }
+  return program;
+}
+
+cl_kernel Runtime::kernel(const std::string& family, const std::string& name,
+                          const std::string& options) {
+  const auto key = std::make_tuple(family, name, options);
+  if (auto it = kernels_.find(key); it != kernels_.end()) return it->second;
+  auto& program = programs_[{family, options}];
+  if (!program) program = build_program(family, options);
+  cl_int st = CL_SUCCESS;
+  cl_kernel k = clCreateKernel(program, name.c_str(), &st);
+  if (st != CL_SUCCESS)
+    throw Error("kernel '" + name + "' not found in kernels/" + family + ".cl (" +
+                    cl_status_name(st) + ")",
+                kExitInternal);
+  kernels_[key] = k;
+  return k;
+}
+
+size_t Runtime::work_group_size(cl_kernel kernel) {
+  if (auto it = work_group_sizes_.find(kernel); it != work_group_sizes_.end()) return it->second;
+  size_t max_wg = 0, multiple = 1;
+  cl_check(clGetKernelWorkGroupInfo(kernel, info_.device, CL_KERNEL_WORK_GROUP_SIZE,
+                                    sizeof(max_wg), &max_wg, nullptr),
+           "clGetKernelWorkGroupInfo");
+  clGetKernelWorkGroupInfo(kernel, info_.device, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE,
+                           sizeof(multiple), &multiple, nullptr);
+  // 256 keeps GPUs occupied without exhausting registers; never more than the kernel allows,
+  // and a multiple of the preferred granularity where possible.
+  size_t wg = std::min<size_t>(256, std::max<size_t>(1, max_wg));
+  if (multiple > 1 && wg >= multiple) wg -= wg % multiple;
+  work_group_sizes_[kernel] = wg;
+  return wg;
+}
+
+Buffer Runtime::alloc(size_t bytes) {
+  cl_int st = CL_SUCCESS;
+  cl_mem m = clCreateBuffer(context_, CL_MEM_READ_WRITE, std::max<size_t>(bytes, 4), nullptr, &st);
+  if (st != CL_SUCCESS)
+    throw Error("cannot allocate " + std::to_string(bytes) + " bytes on " + info_.name + ": " +
+                    cl_status_name(st),
+                kExitInternal);
+  return Buffer(m, bytes);
+}
+
+Buffer Runtime::sub_buffer(const Buffer& parent, size_t offset, size_t bytes) {
+  cl_buffer_region region{offset, std::max<size_t>(bytes, 4)};
+  cl_int st = CL_SUCCESS;
+  cl_mem m = clCreateSubBuffer(parent.get(), CL_MEM_READ_WRITE, CL_BUFFER_CREATE_TYPE_REGION,
+                               &region, &st);
+  cl_check(st, "clCreateSubBuffer");
+  return Buffer(m, bytes);
+}
+
+void Runtime::upload(cl_mem dst, const void* src, size_t bytes, size_t offset) {
+  if (bytes == 0) return;
+  cl_check(clEnqueueWriteBuffer(queue_, dst, CL_TRUE, offset, bytes, src, 0, nullptr, nullptr),
+           "clEnqueueWriteBuffer");
+}
+
+void Runtime::download(cl_mem src, void* dst, size_t bytes, size_t offset) {
+  if (bytes == 0) return;
+  cl_check(clEnqueueReadBuffer(queue_, src, CL_TRUE, offset, bytes, dst, 0, nullptr, nullptr),
+           "clEnqueueReadBuffer");
+}
+
+void Runtime::fill_zero(cl_mem dst, size_t bytes, size_t offset) {
+  if (bytes == 0) return;
+  const float zero = 0.0f;
+  cl_check(clEnqueueFillBuffer(queue_, dst, &zero, sizeof(zero), offset, bytes, 0, nullptr,
+                               nullptr),
+           "clEnqueueFillBuffer");
+}
+
+void Runtime::finish() { cl_check(clFinish(queue_), "clFinish"); }
+
+Buffer Runtime::upload_floats(const std::vector<float>& v) {
+  Buffer b = alloc(v.size() * sizeof(float));
+  upload(b.get(), v.data(), v.size() * sizeof(float));
+  return b;
+}
+
+std::vector<float> Runtime::download_floats(cl_mem src, size_t count) {
+  std::vector<float> v(count);
+  download(src, v.data(), count * sizeof(float));
+  return v;
+}
+
+// ---- Launch ----------------------------------------------------------------------------------
+
+Launch& Launch::arg(cl_mem m) {
+  cl_check(clSetKernelArg(kernel_, index_++, sizeof(cl_mem), &m), "clSetKernelArg(mem)");
+  return *this;
+}
+Launch& Launch::arg(float v) {
+  cl_check(clSetKernelArg(kernel_, index_++, sizeof(float), &v), "clSetKernelArg(float)");
+  return *this;
+}
+Launch& Launch::arg(int v) {
+  cl_check(clSetKernelArg(kernel_, index_++, sizeof(int), &v), "clSetKernelArg(int)");
+  return *this;
+}
+Launch& Launch::arg(unsigned v) {
+  cl_check(clSetKernelArg(kernel_, index_++, sizeof(unsigned), &v), "clSetKernelArg(uint)");
+  return *this;
+}
+Launch& Launch::local_floats(size_t n) {
+  cl_check(clSetKernelArg(kernel_, index_++, n * sizeof(float), nullptr), "clSetKernelArg(local)");
+  return *this;
+}
+
+void Launch::run(size_t n) {
+  if (n == 0) return;
+  const size_t wg = rt_.work_group_size(kernel_);
+  const size_t global = (n + wg - 1) / wg * wg;
+  cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 1, nullptr, &global, &wg, 0, nullptr,
+                                  nullptr),
+           "clEnqueueNDRangeKernel");
+}
+
+void Launch::run2(size_t n0, size_t n1) {
+  if (n0 == 0 || n1 == 0) return;
+  // Dimension 0 takes as much of the work-group as it can use: it is the contiguous one.
+  const size_t wg = rt_.work_group_size(kernel_);
+  size_t l0 = 1;
+  while (l0 * 2 <= wg && l0 < n0) l0 *= 2;
+  size_t l1 = 1;
+  while (l0 * l1 * 2 <= wg && l1 < n1) l1 *= 2;
+  const size_t local[2] = {l0, l1};
+  const size_t global[2] = {(n0 + l0 - 1) / l0 * l0, (n1 + l1 - 1) / l1 * l1};
+  cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 2, nullptr, global, local, 0, nullptr,
+                                  nullptr),
+           "clEnqueueNDRangeKernel");
+}
+
+}  // namespace nova

@@ -1,0 +1,122 @@
+#pragma once
+// Runs a Graph on one Runtime: plans and allocates memory once, then runs forward and
+// backward passes on the runtime's in-order queue, optionally timing every op and checking
+// every tensor for NaN/Inf.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "nova/graph.hpp"
+#include "nova/memory_plan.hpp"
+#include "nova/runtime.hpp"
+
+namespace nova {
+
+struct ExecutorOptions {
+  bool profile = false;       // time every op with OpenCL profiling events
+  bool check_finite = false;  // after every op, stop at the first NaN/Inf, naming op and tensor
+  unsigned seed = 1;          // parameter initialisation
+};
+
+// What an op sees while it runs: its tensors' buffers and shapes, and gradient slots.
+class ExecContext {
+ public:
+  Runtime& rt;
+
+  cl_mem in(size_t i) const;
+  cl_mem out(size_t i) const;
+  const Shape& in_shape(size_t i) const;
+  const Shape& out_shape(size_t i) const;
+  size_t num_inputs() const { return op_.inputs().size(); }
+  size_t num_outputs() const { return op_.outputs().size(); }
+  // Gradient of output i; nullptr when nothing on the path to the loss reads that output
+  // (treat it as zero).
+  cl_mem grad_out(size_t i) const;
+  // Gradient of input i to write; nullptr when that input needs none.
+  cl_mem grad_in(size_t i) const;
+  // Whether grad_in(i) already holds a contribution to add to (otherwise overwrite it).
+  bool accumulate_in(size_t i) const;
+  cl_mem workspace() const { return workspace_; }
+
+  Launch launch(const std::string& family, const std::string& name,
+                const std::string& options = "") {
+    return rt.launch(family, name, options);
+  }
+
+ private:
+  friend class Executor;
+  ExecContext(Runtime& r, class Executor& e, const Op& op, int node, cl_mem ws)
+      : rt(r), ex_(e), op_(op), node_(node), workspace_(ws) {}
+  class Executor& ex_;
+  const Op& op_;
+  int node_;
+  cl_mem workspace_;
+};
+
+struct OpTiming {
+  std::string type;
+  int calls = 0;
+  double ms = 0.0;
+};
+
+class Executor {
+ public:
+  Executor(Runtime& rt, Graph& graph, ExecutorOptions options = {});
+  Executor(const Executor&) = delete;
+  Executor& operator=(const Executor&) = delete;
+
+  void forward();
+  void backward();  // needs a loss (Graph::set_loss); runs after forward()
+
+  void set(Tensor t, const std::vector<float>& values);
+  void set(Tensor t, const float* values, size_t count);
+  std::vector<float> get(Tensor t);       // a kept tensor, an input or a parameter
+  std::vector<float> get_grad(Tensor t);  // gradient of a parameter or grad-requiring input
+  cl_mem buffer(Tensor t) const;
+  cl_mem grad_buffer(Tensor t) const;  // nullptr if it has none
+  float loss();
+
+  // All parameters live in one arena and their gradients in a second one with the same
+  // layout, so an optimiser updates everything with one kernel.
+  cl_mem parameter_arena() const { return param_arena_.get(); }
+  cl_mem gradient_arena() const { return grad_arena_.get(); }
+  size_t parameter_floats() const { return param_arena_floats_; }
+  size_t parameter_count() const;  // real parameters, without alignment padding
+
+  // Peak bytes of the planned (reused) arena and what separate buffers would need.
+  const MemoryPlan& plan() const { return plan_; }
+  size_t parameter_bytes() const { return 2 * param_arena_floats_ * sizeof(float); }
+
+  // Accumulated per-op-type timings (with options.profile), sorted by total time.
+  std::vector<OpTiming> timings() const;
+  void reset_timings() { timings_.clear(); }
+  std::string profile_table() const;
+
+ private:
+  friend class ExecContext;
+  void build_schedule();
+  void allocate();
+  void init_parameters(unsigned seed);
+  void run_node(int node, Pass pass);
+  void check_finite(int node, Pass pass);
+
+  Runtime& rt_;
+  Graph& graph_;
+  ExecutorOptions options_;
+
+  std::vector<int> backward_nodes_;  // in execution order
+  std::vector<bool> has_grad_;       // per tensor
+  // Per node and input slot: accumulate into the gradient rather than overwrite it.
+  std::vector<std::vector<bool>> accumulate_;
+
+  Buffer arena_, param_arena_, grad_arena_;
+  size_t param_arena_floats_ = 0;
+  std::vector<Buffer> values_, grads_;                 // sub-buffers, per tensor
+  std::vector<Buffer> fwd_workspace_, bwd_workspace_;  // per node
+  MemoryPlan plan_;
+  bool forward_done_ = false;
+
+  std::map<std::string, OpTiming> timings_;
+};
+
+}  // namespace nova

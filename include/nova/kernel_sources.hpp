@@ -1,0 +1,15 @@
+#pragma once
+// The OpenCL C sources of kernels/*.cl, embedded at build time (cmake/embed_kernels.cmake).
+#include <string_view>
+#include <vector>
+
+namespace nova {
+
+struct KernelSource {
+  std::string_view family;  // file name without .cl, e.g. "activation"
+  std::string_view source;
+};
+
+const std::vector<KernelSource>& kernel_sources();
+
+}  // namespace nova

@@ -1,0 +1,38 @@
+#pragma once
+// The ops a graph is built from. Each builder adds one op to the graph of its inputs and
+// returns its output. Shapes are row-major; the last dimension is the feature dimension.
+// Several same-shaped networks are stacked in a leading batch dimension B: x [B, M, K],
+// w [B, K, N], b [B, N].
+#include <vector>
+
+#include "nova/graph.hpp"
+
+namespace nova {
+
+enum class Activation { Identity, ReLU, Sigmoid, Softplus };
+const char* activation_name(Activation a);
+
+// y = x * w through the GEMM provider (CLBlast), one batched GEMM when B > 1.
+// x [M, K] or [B, M, K]; w [K, N] or [B, K, N].
+Tensor linear(Tensor x, Tensor w);
+
+// y = act(h + b), the bias broadcast over rows; h [M, N] or [B, M, N], b [N] or [B, N].
+Tensor bias_act(Tensor h, Tensor b, Activation act);
+
+// A dense layer: bias_act(linear(x, w), b, act).
+Tensor dense(Tensor x, Tensor w, Tensor b, Activation act);
+
+// Concatenation along the last dimension; all other dimensions must match.
+Tensor concat(const std::vector<Tensor>& parts);
+
+// NeRF positional encoding of the last dimension D: [p, sin(2^0 p), cos(2^0 p), ...,
+// sin(2^(L-1) p), cos(2^(L-1) p)], each block D wide (no pi factor), D * (1 + 2L) outputs.
+Tensor positional_encoding(Tensor p, int frequencies);
+
+// Mean over all elements of (pred - target)^2: a scalar.
+Tensor mse(Tensor pred, Tensor target);
+
+// sum_i weights[i] * terms[i] over scalars.
+Tensor weighted_sum(const std::vector<Tensor>& terms, const std::vector<float>& weights);
+
+}  // namespace nova

@@ -1,0 +1,150 @@
+#pragma once
+// The OpenCL runtime: device discovery and choice, one context + one in-order queue per
+// Runtime, programs built once per context and cached, RAII buffers, kernel launches.
+#include <CL/cl.h>
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "nova/error.hpp"
+
+namespace nova {
+
+struct DeviceInfo {
+  cl_platform_id platform = nullptr;
+  cl_device_id device = nullptr;
+  int platform_index = 0;
+  int device_index = 0;
+  std::string platform_name;
+  std::string name;
+  std::string vendor;
+  std::string driver_version;
+  std::string opencl_version;  // CL_DEVICE_VERSION, e.g. "OpenCL 1.2 PoCL ..."
+  cl_device_type type = 0;
+  cl_uint compute_units = 0;
+  cl_ulong global_mem_bytes = 0;
+  cl_ulong max_alloc_bytes = 0;
+  size_t max_work_group_size = 0;
+  cl_uint base_addr_align_bytes = 0;
+  bool fp64 = false;
+  bool unified_memory = false;
+
+  std::string type_name() const;  // "GPU", "CPU", "ACCELERATOR", ...
+  std::string id() const;         // "P:D", the selector form
+};
+
+// Every device of every platform. An empty list means no OpenCL platform is installed.
+std::vector<DeviceInfo> list_devices();
+
+// Chooses a device: `selector` ("P:D" or a case-insensitive substring of the device or
+// platform name); when empty, the NOVA_DEVICE variable; when that is empty too, the first
+// GPU, else the first CPU. Throws Error (exit code 2) naming what was found and what to
+// install when nothing matches.
+DeviceInfo select_device(const std::string& selector = "");
+
+// Points PoCL's kernel compile cache at `dir` unless POCL_CACHE_DIR is already set. Must run
+// before the first OpenCL call of the process to take effect.
+void use_pocl_cache_dir(const std::string& dir);
+
+class Buffer {
+ public:
+  Buffer() = default;
+  Buffer(cl_mem mem, size_t bytes) : mem_(mem), bytes_(bytes) {}
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  Buffer(Buffer&& o) noexcept { *this = std::move(o); }
+  Buffer& operator=(Buffer&& o) noexcept;
+  ~Buffer();
+
+  cl_mem get() const { return mem_; }
+  size_t bytes() const { return bytes_; }
+  explicit operator bool() const { return mem_ != nullptr; }
+
+ private:
+  cl_mem mem_ = nullptr;
+  size_t bytes_ = 0;
+};
+
+class Runtime;
+
+// A kernel launch with its arguments set in order: launch(rt, k).arg(a).arg(b).run(n).
+class Launch {
+ public:
+  Launch(Runtime& rt, cl_kernel kernel) : rt_(rt), kernel_(kernel) {}
+  Launch& arg(cl_mem m);
+  Launch& arg(const Buffer& b) { return arg(b.get()); }
+  Launch& arg(float v);
+  Launch& arg(int v);
+  Launch& arg(unsigned v);
+  Launch& local_floats(size_t n);  // __local float[n]
+  // 1D over n items; the work-group size comes from the device and kernel, the global size
+  // is rounded up, and kernels guard with their own count.
+  void run(size_t n);
+  // 2D over (n0, n1), dimension 0 fastest.
+  void run2(size_t n0, size_t n1);
+
+ private:
+  Runtime& rt_;
+  cl_kernel kernel_;
+  cl_uint index_ = 0;
+};
+
+class Runtime {
+ public:
+  explicit Runtime(const DeviceInfo& device, bool profiling = true);
+  ~Runtime();
+  Runtime(const Runtime&) = delete;
+  Runtime& operator=(const Runtime&) = delete;
+
+  const DeviceInfo& info() const { return info_; }
+  cl_context context() const { return context_; }
+  cl_device_id device() const { return info_.device; }
+  cl_command_queue queue() const { return queue_; }
+  cl_command_queue* queue_ptr() { return &queue_; }
+  bool profiling() const { return profiling_; }
+  bool is_cpu() const { return (info_.type & CL_DEVICE_TYPE_CPU) != 0; }
+
+  // The kernel `name` from the embedded family `family`, built with `options`; programs are
+  // built once per (family, options) and kernels created once per name.
+  cl_kernel kernel(const std::string& family, const std::string& name,
+                   const std::string& options = "");
+  Launch launch(const std::string& family, const std::string& name,
+                const std::string& options = "") {
+    return Launch(*this, kernel(family, name, options));
+  }
+  // Work-group size for a 1D launch of `kernel` (queried, never assumed).
+  size_t work_group_size(cl_kernel kernel);
+
+  Buffer alloc(size_t bytes);
+  // A view of [offset, offset + bytes) of `parent`; offset must honour base_addr_align_bytes.
+  Buffer sub_buffer(const Buffer& parent, size_t offset, size_t bytes);
+  void upload(cl_mem dst, const void* src, size_t bytes, size_t offset = 0);
+  void download(cl_mem src, void* dst, size_t bytes, size_t offset = 0);
+  void fill_zero(cl_mem dst, size_t bytes, size_t offset = 0);
+  void finish();
+
+  // Convenience for tests and tools.
+  Buffer upload_floats(const std::vector<float>& v);
+  std::vector<float> download_floats(cl_mem src, size_t count);
+
+ private:
+  cl_program build_program(const std::string& family, const std::string& options);
+
+  DeviceInfo info_;
+  cl_context context_ = nullptr;
+  cl_command_queue queue_ = nullptr;
+  bool profiling_ = false;
+  std::map<std::pair<std::string, std::string>, cl_program> programs_;
+  std::map<std::tuple<std::string, std::string, std::string>, cl_kernel> kernels_;
+  std::map<cl_kernel, size_t> work_group_sizes_;
+};
+
+// Throws ClError when status is not CL_SUCCESS.
+void cl_check(cl_int status, const char* call);
+
+}  // namespace nova

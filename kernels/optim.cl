@@ -1,0 +1,16 @@
+// Adam with bias correction, over a whole parameter arena at once (PyTorch's formulation):
+// m = b1 m + (1 - b1) g; v = b2 v + (1 - b2) g^2;
+// p -= step_size * m / (sqrt(v) / bc2_sqrt + eps), step_size = lr / (1 - b1^t),
+// bc2_sqrt = sqrt(1 - b2^t).
+__kernel void adam_step(__global float* p, __global const float* g, __global float* m,
+                        __global float* v, uint n, float step_size, float beta1, float beta2,
+                        float bc2_sqrt, float eps) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  const float gi = g[i];
+  const float mi = beta1 * m[i] + (1.0f - beta1) * gi;
+  const float vi = beta2 * v[i] + (1.0f - beta2) * gi * gi;
+  m[i] = mi;
+  v[i] = vi;
+  p[i] -= step_size * mi / (sqrt(vi) / bc2_sqrt + eps);
+}

@@ -1,0 +1,20 @@
+// Data movement: column blocks for concatenation and its backward (split).
+
+// dst[r, offset + c] = src[r, c] for a src of src_cols columns inside dst of dst_cols.
+__kernel void copy_cols(__global const float* src, __global float* dst, uint rows, uint src_cols,
+                        uint dst_cols, uint offset) {
+  const uint i = get_global_id(0);
+  if (i >= rows * src_cols) return;
+  const uint r = i / src_cols, c = i % src_cols;
+  dst[(size_t)r * dst_cols + offset + c] = src[i];
+}
+
+// dsrc[r, c] (+)= ddst[r, offset + c].
+__kernel void copy_cols_back(__global const float* ddst, __global float* dsrc, uint rows,
+                             uint src_cols, uint dst_cols, uint offset, int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= rows * src_cols) return;
+  const uint r = i / src_cols, c = i % src_cols;
+  const float g = ddst[(size_t)r * dst_cols + offset + c];
+  dsrc[i] = accumulate ? dsrc[i] + g : g;
+}
