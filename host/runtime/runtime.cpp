@@ -39,7 +39,8 @@ Runtime::Runtime(const DeviceInfo& device, bool profiling) : info_(device), prof
 Runtime::~Runtime() {
   if (queue_) clFinish(queue_);
   for (auto& [key, k] : kernels_) clReleaseKernel(k);
-  for (auto& [key, p] : programs_) clReleaseProgram(p);
+  for (auto& [key, p] : programs_)
+    if (p) clReleaseProgram(p);
   if (queue_) clReleaseCommandQueue(queue_);
   if (context_) clReleaseContext(context_);
 }
@@ -73,16 +74,20 @@ cl_kernel Runtime::kernel(const std::string& family, const std::string& name,
                           const std::string& options) {
   const auto key = std::make_tuple(family, name, options);
   if (auto it = kernels_.find(key); it != kernels_.end()) return it->second;
-  auto& program = programs_[{family, options}];
-  if (!program) program = build_program(family, options);
+  prepare(family, options);
   cl_int st = CL_SUCCESS;
-  cl_kernel k = clCreateKernel(program, name.c_str(), &st);
+  cl_kernel k = clCreateKernel(programs_[{family, options}], name.c_str(), &st);
   if (st != CL_SUCCESS)
     throw Error("kernel '" + name + "' not found in kernels/" + family + ".cl (" +
                     cl_status_name(st) + ")",
                 kExitInternal);
   kernels_[key] = k;
   return k;
+}
+
+void Runtime::prepare(const std::string& family, const std::string& options) {
+  auto& program = programs_[{family, options}];
+  if (!program) program = build_program(family, options);
 }
 
 size_t Runtime::work_group_size(cl_kernel kernel) {

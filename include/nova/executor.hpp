@@ -71,7 +71,10 @@ class Executor {
   void set(Tensor t, const std::vector<float>& values);
   void set(Tensor t, const float* values, size_t count);
   std::vector<float> get(Tensor t);       // a kept tensor, an input or a parameter
-  std::vector<float> get_grad(Tensor t);  // gradient of a parameter or grad-requiring input
+  // Gradient of a parameter or grad-requiring input. Input gradients share memory with
+  // forward activations (their lifetimes do not overlap), so read them before the next
+  // forward(); parameter gradients live in their own arena until the next backward().
+  std::vector<float> get_grad(Tensor t);
   cl_mem buffer(Tensor t) const;
   cl_mem grad_buffer(Tensor t) const;  // nullptr if it has none
   float loss();

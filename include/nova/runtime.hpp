@@ -113,6 +113,8 @@ class Runtime {
   // built once per (family, options) and kernels created once per name.
   cl_kernel kernel(const std::string& family, const std::string& name,
                    const std::string& options = "");
+  // Builds (or finds) the program of a family without creating a kernel: for warm-ups.
+  void prepare(const std::string& family, const std::string& options = "");
   Launch launch(const std::string& family, const std::string& name,
                 const std::string& options = "") {
     return Launch(*this, kernel(family, name, options));

@@ -1,0 +1,25 @@
+#pragma once
+// nova-bench: one subcommand per benchmark, each printing a table and CSV (and PNG plots
+// where a picture says more). Speeds are compared as ratios inside one run: this machine
+// is shared and noisy.
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace nova::bench {
+
+using Args = std::vector<std::string>;
+
+int mlp(const Args& args);
+
+struct Benchmark {
+  const char* name;
+  const char* summary;
+  int (*run)(const Args&);
+};
+const std::vector<Benchmark>& benchmarks();
+
+// Median of `repeats` timings of `fn` (seconds), after one untimed warm-up call.
+double time_median(int repeats, const std::function<void()>& fn);
+
+}  // namespace nova::bench

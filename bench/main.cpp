@@ -1,0 +1,54 @@
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <exception>
+#include <iostream>
+
+#include "bench.hpp"
+#include "nova/error.hpp"
+
+namespace nova::bench {
+
+const std::vector<Benchmark>& benchmarks() {
+  static const std::vector<Benchmark> all = {
+      {"mlp", "reference MLP forward / forward+backward, GEMMs beside a host BLAS", mlp},
+  };
+  return all;
+}
+
+double time_median(int repeats, const std::function<void()>& fn) {
+  fn();
+  std::vector<double> t;
+  for (int i = 0; i < repeats; ++i) {
+    const auto a = std::chrono::steady_clock::now();
+    fn();
+    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+}  // namespace nova::bench
+
+int main(int argc, char** argv) {
+  const auto& all = nova::bench::benchmarks();
+  if (argc < 2 || !std::strcmp(argv[1], "--help")) {
+    std::cout << "usage: nova-bench <benchmark> [options]\n\nbenchmarks:\n";
+    for (const auto& b : all) std::cout << "  " << b.name << "\t" << b.summary << "\n";
+    return argc < 2 ? nova::kExitUsage : 0;
+  }
+  for (const auto& b : all)
+    if (b.name == std::string(argv[1])) {
+      try {
+        return b.run(nova::bench::Args(argv + 2, argv + argc));
+      } catch (const nova::Error& e) {
+        std::cerr << "nova-bench " << b.name << ": error: " << e.what() << "\n";
+        return e.exit_code();
+      } catch (const std::exception& e) {
+        std::cerr << "nova-bench " << b.name << ": error: " << e.what() << "\n";
+        return nova::kExitInternal;
+      }
+    }
+  std::cerr << "nova-bench: unknown benchmark '" << argv[1] << "'\n";
+  return nova::kExitUsage;
+}

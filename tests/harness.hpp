@@ -1,0 +1,51 @@
+#pragma once
+// The op test harness: a runtime per process, random data, comparisons against float64
+// host references with stated tolerances, and finite-difference gradient checks.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "nova/executor.hpp"
+#include "nova/graph.hpp"
+#include "nova/runtime.hpp"
+
+namespace nova::test {
+
+// The device under test: NOVA_DEVICE if set, else nova's default choice.
+Runtime& runtime();
+
+std::vector<float> random_floats(size_t n, float lo, float hi, unsigned seed);
+std::vector<double> to_double(const std::vector<float>& v);
+
+// Largest |actual - expected| / (atol + rtol * |expected|); <= 1 means within tolerance.
+// Reports the worst element through BOOST_TEST when it fails.
+double max_scaled_error(const std::vector<float>& actual, const std::vector<double>& expected,
+                        double atol, double rtol);
+void expect_close(const std::vector<float>& actual, const std::vector<double>& expected,
+                  double atol, double rtol, const std::string& what);
+
+// A graph to check: `inputs` are graph inputs (those to differentiate are created with
+// requires_grad = true), `output` is any tensor of it.
+struct OpUnderTest {
+  std::vector<Tensor> inputs;
+  Tensor output;
+};
+using BuildFn = std::function<OpUnderTest(Graph&)>;
+
+struct GradCheckOptions {
+  float step = 1e-2f;         // central-difference step h
+  size_t max_components = 48; // per input, spread evenly over it
+  // Passes when |fd - analytic| <= tolerance * (max |analytic| over that input + 1e-6):
+  // the error normalised by the gradient's scale, as ggml's test-backend-ops does.
+  double tolerance = 2e-2;
+  unsigned seed = 7;
+};
+
+// Builds the graph, appends loss = mse(output, random target), sets `values` (one vector per
+// input), runs forward + backward and compares the gradient of every input that requires one
+// with central differences of the same device forward (in float32). Returns the worst
+// normalised error over all checked components.
+double check_gradients(const BuildFn& build, const std::vector<std::vector<float>>& values,
+                       const GradCheckOptions& options = {});
+
+}  // namespace nova::test

@@ -1,0 +1,86 @@
+// GEMM through the provider (CLBlast with the device's tuning) against a float64 host
+// reference, for the NeRF layer shapes and the transposed products the backward uses.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <limits>
+
+#include "harness.hpp"
+#include "nova/gemm.hpp"
+
+using namespace nova;
+
+namespace {
+
+struct Case {
+  bool ta, tb;
+  size_t m, n, k, batch;
+};
+
+// Checks C = op(A) op(B) + beta C0 elementwise against the float64 product. Bound per element:
+// |err| <= 2 k u sum_l |a_il b_lj| + u |c| with u = 2^-24 (Higham's worst-case bound for a
+// float32 dot product of length k, doubled for the beta term), so an indexing or layout bug,
+// which moves results by O(sum |a b|), cannot pass.
+void run_case(const Case& c, float beta) {
+  Runtime& rt = test::runtime();
+  const size_t rows_a = c.ta ? c.k : c.m, cols_a = c.ta ? c.m : c.k;
+  const size_t rows_b = c.tb ? c.n : c.k, cols_b = c.tb ? c.k : c.n;
+  const size_t sa = rows_a * cols_a, sb = rows_b * cols_b, sc = c.m * c.n;
+  const auto a = test::random_floats(sa * c.batch, -1, 1, 1);
+  const auto b = test::random_floats(sb * c.batch, -1, 1, 2);
+  const auto c0 = test::random_floats(sc * c.batch, -1, 1, 3);
+  Buffer da = rt.upload_floats(a), db = rt.upload_floats(b), dc = rt.upload_floats(c0);
+  GemmArgs g{c.ta, c.tb, c.m, c.n, c.k, 1.0f, da.get(), cols_a, sa, db.get(), cols_b, sb,
+             beta, dc.get(), c.n, sc, c.batch};
+  Buffer temp;
+  if (size_t bytes = gemm_temp_bytes(rt, g)) temp = rt.alloc(bytes);
+  gemm(rt, g, temp.get());
+  const auto out = rt.download_floats(dc.get(), sc * c.batch);
+
+  const double u = std::numeric_limits<float>::epsilon() / 2;
+  double worst = 0;
+  for (size_t p = 0; p < c.batch; ++p)
+    for (size_t i = 0; i < c.m; ++i)
+      for (size_t j = 0; j < c.n; ++j) {
+        double ref = 0, mag = 0;
+        for (size_t l = 0; l < c.k; ++l) {
+          const double x = c.ta ? a[p * sa + l * cols_a + i] : a[p * sa + i * cols_a + l];
+          const double y = c.tb ? b[p * sb + j * cols_b + l] : b[p * sb + l * cols_b + j];
+          ref += x * y;
+          mag += std::fabs(x * y);
+        }
+        const double cprev = c0[p * sc + i * c.n + j];
+        ref += beta * cprev;
+        const double bound = 2 * c.k * u * mag + 2 * u * std::fabs(cprev) + 1e-30;
+        worst = std::max(worst, std::fabs(out[p * sc + i * c.n + j] - ref) / bound);
+      }
+  BOOST_TEST(worst <= 1.0, "m=" << c.m << " n=" << c.n << " k=" << c.k << " ta=" << c.ta
+                                << " tb=" << c.tb << " batch=" << c.batch << " beta=" << beta
+                                << ": error/bound " << worst);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(gemm)
+
+// Row counts are deliberately odd (no multiple of any tile or work-group size).
+BOOST_AUTO_TEST_CASE(nerf_layer_shapes_forward) {
+  run_case({false, false, 97, 256, 63, 1}, 0.0f);   // encoded xyz -> first layer
+  run_case({false, false, 97, 256, 256, 1}, 0.0f);  // hidden layers
+  run_case({false, false, 97, 256, 319, 1}, 0.0f);  // the skip layer, [input, h]
+  run_case({false, false, 97, 4, 256, 1}, 0.0f);    // the rgb + sigma head
+}
+
+BOOST_AUTO_TEST_CASE(backward_products) {
+  run_case({false, true, 97, 63, 256, 1}, 0.0f);   // dX = dY W^T
+  run_case({false, true, 97, 256, 4, 1}, 1.0f);    // dX of the head, accumulating
+  run_case({true, false, 63, 256, 97, 1}, 0.0f);   // dW = X^T dY
+  run_case({true, false, 256, 4, 97, 1}, 1.0f);    // dW of the head, accumulating
+}
+
+BOOST_AUTO_TEST_CASE(batched_networks) {
+  run_case({false, false, 53, 32, 19, 3}, 0.0f);
+  run_case({false, true, 53, 19, 32, 3}, 1.0f);
+  run_case({true, false, 19, 32, 53, 3}, 0.0f);
+}
+
+BOOST_AUTO_TEST_SUITE_END()

@@ -1,0 +1,112 @@
+// Device discovery and choice, program building and its error reporting.
+#include <boost/test/unit_test.hpp>
+#include <cstdlib>
+#include <filesystem>
+
+#include "harness.hpp"
+#include "nova/runtime.hpp"
+
+using namespace nova;
+
+namespace {
+
+// Runs the nova CLI with `args`, returns its exit code and captured stderr.
+std::pair<int, std::string> run_cli(const std::string& args, const std::string& env = "") {
+  const std::string err = std::filesystem::temp_directory_path() / "nova_test_runtime.err";
+  const std::string cmd = env + " " + NOVA_BINARY_DIR "/nova " + args + " >/dev/null 2>" + err;
+  const int status = std::system(cmd.c_str());
+  std::string text;
+  if (FILE* f = std::fopen(err.c_str(), "r")) {
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, n);
+    std::fclose(f);
+  }
+  std::filesystem::remove(err);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text};
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(runtime)
+
+BOOST_AUTO_TEST_CASE(lists_devices_and_selects_by_index_and_name) {
+  const auto all = list_devices();
+  BOOST_REQUIRE(!all.empty());
+  for (const auto& d : all) {
+    BOOST_TEST(!d.name.empty());
+    BOOST_TEST(d.compute_units > 0u);
+    BOOST_TEST(d.global_mem_bytes > 0u);
+    BOOST_TEST(select_device(d.id()).device == d.device);
+    BOOST_TEST(select_device(d.name.substr(0, 6)).name.find(d.name.substr(0, 6)) == 0u);
+  }
+}
+
+BOOST_AUTO_TEST_CASE(bad_selector_is_a_usage_error_naming_what_was_found) {
+  try {
+    select_device("no-such-device-anywhere");
+    BOOST_FAIL("select_device accepted a selector that matches nothing");
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    BOOST_TEST(e.exit_code() == kExitUsage);
+    BOOST_TEST(what.find("no-such-device-anywhere") != std::string::npos);
+    BOOST_TEST(what.find("found:") != std::string::npos);
+    BOOST_TEST(what.find(list_devices().front().name) != std::string::npos);
+  }
+  try {
+    select_device("9:9");
+    BOOST_FAIL("select_device accepted index 9:9");
+  } catch (const Error& e) {
+    BOOST_TEST(e.exit_code() == kExitUsage);
+  }
+}
+
+BOOST_AUTO_TEST_CASE(cli_reports_bad_selector_with_exit_code_2) {
+  if (!std::filesystem::exists(NOVA_BINARY_DIR "/nova")) return;  // built without tools
+  const auto [code, err] = run_cli("devices --device no-such-device");
+  BOOST_TEST(code == 2);
+  BOOST_TEST(err.find("no-such-device") != std::string::npos);
+  BOOST_TEST(std::count(err.begin(), err.end(), '\n') == 1, "one line: " << err);
+  const auto [code_env, err_env] = run_cli("devices", "NOVA_DEVICE=nothing-here");
+  BOOST_TEST(code_env == 2);
+  BOOST_TEST(err_env.find("NOVA_DEVICE") != std::string::npos);
+  const auto [code_ok, err_ok] = run_cli("devices");
+  BOOST_TEST(code_ok == 0, err_ok);
+}
+
+BOOST_AUTO_TEST_CASE(cli_without_platform_says_what_to_install) {
+  if (!std::filesystem::exists(NOVA_BINARY_DIR "/nova")) return;
+  // An empty vendor directory leaves the ICD loader with no platform at all.
+  const auto empty = std::filesystem::temp_directory_path() / "nova_no_icd";
+  std::filesystem::create_directories(empty);
+  const auto [code, err] = run_cli("devices", "OCL_ICD_VENDORS=" + empty.string());
+  std::filesystem::remove_all(empty);
+  BOOST_TEST(code == 2);
+  BOOST_TEST(err.find("no OpenCL platform") != std::string::npos, err);
+  BOOST_TEST(err.find("pocl-opencl-icd") != std::string::npos, err);
+}
+
+BOOST_AUTO_TEST_CASE(programs_are_cached_per_context) {
+  Runtime& rt = test::runtime();
+  cl_kernel a = rt.kernel("tensor", "copy_cols");
+  cl_kernel b = rt.kernel("tensor", "copy_cols");
+  BOOST_TEST(a == b);
+  BOOST_TEST(rt.work_group_size(a) >= 1u);
+  BOOST_TEST(rt.work_group_size(a) <= rt.info().max_work_group_size);
+}
+
+BOOST_AUTO_TEST_CASE(build_failure_shows_the_compiler_log) {
+  Runtime& rt = test::runtime();
+  try {
+    rt.kernel("activation", "bias_act_forward", "-DACT=)");  // breaks `#if ACT == 1`
+    BOOST_FAIL("a broken build was accepted");
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    BOOST_TEST(what.find("kernels/activation.cl failed to build") != std::string::npos, what);
+    BOOST_TEST(what.size() > 120u, "the message carries the build log: " << what);
+  }
+  BOOST_CHECK_THROW(rt.kernel("no_such_family", "k"), Error);
+  BOOST_CHECK_THROW(rt.kernel("tensor", "no_such_kernel"), Error);
+}
+
+BOOST_AUTO_TEST_SUITE_END()

@@ -1,0 +1,29 @@
+// Not a check of results: fills PoCL's on-disk compile cache (every kernel family, every
+// activation variant, both CLBlast GEMM programs) before the other suites run in parallel.
+// CTest runs it first as the `kernel_cache` fixture.
+#include <boost/test/unit_test.hpp>
+
+#include "harness.hpp"
+#include "nova/gemm.hpp"
+#include "nova/kernel_sources.hpp"
+
+using namespace nova;
+
+BOOST_AUTO_TEST_SUITE(warmup)
+
+BOOST_AUTO_TEST_CASE(compile_every_program) {
+  Runtime& rt = test::runtime();
+  for (const auto& k : kernel_sources()) rt.prepare(std::string(k.family));
+  for (int act = 1; act <= 3; ++act) rt.prepare("activation", "-DACT=" + std::to_string(act));
+  const std::vector<float> ones(64 * 64, 1.0f);
+  Buffer a = rt.upload_floats(ones), b = rt.upload_floats(ones), c = rt.upload_floats(ones);
+  for (size_t batch : {1, 2}) {
+    GemmArgs g{false, false, 32, 32, 32, 1.0f, a.get(), 32, 1024, b.get(), 32, 1024,
+               0.0f, c.get(), 32, 1024, batch};
+    gemm(rt, g);
+  }
+  rt.finish();
+  BOOST_TEST(rt.download_floats(c.get(), 1)[0] == 32.0f);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
