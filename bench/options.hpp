@@ -1,0 +1,56 @@
+#pragma once
+// `--key value` and `--flag` parsing for nova-bench (which links no Boost, so that a GPU
+// machine without packages can build it from the core alone).
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "nova/error.hpp"
+
+namespace nova::bench {
+
+class Options {
+ public:
+  Options(const std::vector<std::string>& args, const std::map<std::string, std::string>& defaults)
+      : values_(defaults) {
+    for (size_t i = 0; i < args.size(); ++i) {
+      if (args[i].rfind("--", 0) != 0) throw Error("unexpected argument '" + args[i] + "'");
+      const std::string key = args[i].substr(2);
+      if (!values_.count(key)) throw Error("unknown option --" + key);
+      const bool is_flag = values_[key] == "off" || values_[key] == "on";
+      if (is_flag) {
+        values_[key] = "on";
+      } else {
+        if (i + 1 >= args.size()) throw Error("--" + key + " needs a value");
+        values_[key] = args[++i];
+      }
+    }
+  }
+  std::string str(const std::string& k) const { return values_.at(k); }
+  bool flag(const std::string& k) const { return values_.at(k) == "on"; }
+  long integer(const std::string& k) const {
+    try {
+      return std::stol(values_.at(k));
+    } catch (const std::exception&) {
+      throw Error("--" + k + " must be an integer, got '" + values_.at(k) + "'");
+    }
+  }
+  std::vector<long> integers(const std::string& k) const {
+    std::vector<long> out;
+    std::stringstream s(values_.at(k));
+    for (std::string item; std::getline(s, item, ',');) {
+      try {
+        out.push_back(std::stol(item));
+      } catch (const std::exception&) {
+        throw Error("--" + k + " must be a comma-separated list of integers");
+      }
+    }
+    return out;
+  }
+
+ private:
+  std::map<std::string, std::string> values_;
+};
+
+}  // namespace nova::bench
