@@ -1,0 +1,74 @@
+#pragma once
+// Float64 host reference of the compositing renderer, written straight from the formulas
+// (DESIGN.md, "Compositing") and independent of kernels/render.cl: no union-of-probabilities
+// trick, no reverse scan; gradients come from central differences of this function.
+#include <cmath>
+#include <vector>
+
+namespace nova::test {
+
+struct RenderRefInput {
+  int nerfs = 1, rays = 1, samples = 1, channels = 5;
+  std::vector<double> raw;    // [N, R, S, C]
+  std::vector<double> delta;  // [R, S] or [N, R, S]
+  std::vector<double> z;      // [R, S]
+  std::vector<double> noise;  // empty or [N, R, S]
+  bool rgb_sigmoid = true, blend_sigmoid = true, hard_blend = false;
+};
+
+struct RenderRefOutput {
+  std::vector<double> rgb, nerf_rgb, mask, depth, acc;
+};
+
+inline double ref_sigmoid(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+inline RenderRefOutput render_reference(const RenderRefInput& in) {
+  const int N = in.nerfs, R = in.rays, S = in.samples, C = in.channels;
+  const bool per_nerf_delta = in.delta.size() == static_cast<size_t>(N) * R * S;
+  RenderRefOutput out;
+  out.rgb.assign(R * 3, 0.0);
+  out.nerf_rgb.assign(N * R * 3, 0.0);
+  out.mask.assign(N * R, 0.0);
+  out.depth.assign(R, 0.0);
+  out.acc.assign(R, 0.0);
+  for (int r = 0; r < R; ++r) {
+    double T = 1.0;
+    std::vector<double> Tn(N, 1.0);
+    for (int i = 0; i < S; ++i) {
+      std::vector<double> alpha(N), blend(N), c(N * 3);
+      for (int n = 0; n < N; ++n) {
+        const size_t at = (static_cast<size_t>(n) * R + r) * S + i;
+        const double* p = &in.raw[at * C];
+        const double sigma = std::max(0.0, p[3] + (in.noise.empty() ? 0.0 : in.noise[at]));
+        const double d = in.delta[per_nerf_delta ? at : static_cast<size_t>(r) * S + i];
+        alpha[n] = 1.0 - std::exp(-sigma * d);
+        blend[n] = in.blend_sigmoid ? ref_sigmoid(p[4]) : p[4];
+        for (int k = 0; k < 3; ++k) c[n * 3 + k] = in.rgb_sigmoid ? ref_sigmoid(p[k]) : p[k];
+      }
+      if (in.hard_blend) {
+        bool object = false;
+        for (int n = 1; n < N; ++n) object = object || blend[n] > 0.5;
+        if (object) blend[0] = 0.0;
+      }
+      double bsum = 0;
+      for (double b : blend) bsum += b;
+      double keep = 1.0;  // prod_n (1 - alpha_n b_n)
+      for (int n = 0; n < N; ++n) {
+        const double b = blend[n] / (bsum + 1e-6);
+        keep *= 1.0 - alpha[n] * b;
+        for (int k = 0; k < 3; ++k) out.rgb[r * 3 + k] += T * alpha[n] * b * c[n * 3 + k];
+        for (int k = 0; k < 3; ++k)
+          out.nerf_rgb[(n * R + r) * 3 + k] += Tn[n] * alpha[n] * c[n * 3 + k];
+        Tn[n] *= 1.0 - alpha[n] + 1e-10;
+      }
+      const double alpha_full = 1.0 - keep;
+      for (int n = 0; n < N; ++n) out.mask[n * R + r] += T * alpha_full * blend[n] / (bsum + 1e-6);
+      out.depth[r] += T * alpha_full * in.z[r * S + i];
+      out.acc[r] += T * alpha_full;
+      T *= keep + 1e-10;
+    }
+  }
+  return out;
+}
+
+}  // namespace nova::test
