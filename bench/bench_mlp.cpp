@@ -73,6 +73,10 @@ double host_blas_seconds(const std::vector<LayerShape>& shapes, size_t m, bool b
 int mlp(const Args& args) {
   const Options o(args, {{"batches", "16384,65536"}, {"repeats", "3"}, {"device", ""},
                          {"width", "256"}, {"depth", "8"}});
+  if (o.help()) {
+    std::cout << o.usage("nova-bench mlp");
+    return 0;
+  }
   const int repeats = static_cast<int>(o.integer("repeats"));
   Runtime rt(select_device(o.str("device")));
   MlpConfig c;

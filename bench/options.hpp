@@ -15,6 +15,10 @@ class Options {
   Options(const std::vector<std::string>& args, const std::map<std::string, std::string>& defaults)
       : values_(defaults) {
     for (size_t i = 0; i < args.size(); ++i) {
+      if (args[i] == "--help" || args[i] == "-h") {
+        help_ = true;
+        continue;
+      }
       if (args[i].rfind("--", 0) != 0) throw Error("unexpected argument '" + args[i] + "'");
       const std::string key = args[i].substr(2);
       if (!values_.count(key)) throw Error("unknown option --" + key);
@@ -26,6 +30,13 @@ class Options {
         values_[key] = args[++i];
       }
     }
+  }
+  // --help was given: print usage() and stop.
+  bool help() const { return help_; }
+  std::string usage(const std::string& command) const {
+    std::string u = "usage: " + command + " [options]\n\noptions (default):\n";
+    for (const auto& [k, v] : values_) u += "  --" + k + " (" + (v.empty() ? "none" : v) + ")\n";
+    return u;
   }
   std::string str(const std::string& k) const { return values_.at(k); }
   bool flag(const std::string& k) const { return values_.at(k) == "on"; }
@@ -51,6 +62,7 @@ class Options {
 
  private:
   std::map<std::string, std::string> values_;
+  bool help_ = false;
 };
 
 }  // namespace nova::bench

@@ -242,6 +242,65 @@ BOOST_AUTO_TEST_CASE(mlp_with_skip_gradient_wrt_input) {
       {random_floats(45, -1, 1, 91)}, o);
 }
 
+BOOST_AUTO_TEST_CASE(batched_networks_match_separate_networks) {
+  // Two networks stacked in the batch dimension (one batched GEMM per layer) against each
+  // network built alone with the same weights: outputs and weight gradients must agree to
+  // float32 rounding (the same products, possibly summed in another order by the GEMM tiles).
+  const size_t rows = 31, in = 7, nets = 2;
+  MlpConfig c;
+  c.depth = 3;
+  c.width = 16;
+  c.skip = 1;
+  c.outputs = 3;
+  const auto x = random_floats(nets * rows * in, -1, 1, 301);
+  const auto t = random_floats(nets * rows * c.outputs, 0, 1, 302);
+
+  MlpConfig cb = c;
+  cb.networks = static_cast<int>(nets);
+  Graph gb;
+  Tensor xb = gb.input("x", Shape{nets, rows, in});
+  Tensor tb = gb.input("t", Shape{nets, rows, static_cast<size_t>(c.outputs)});
+  const Mlp mb = build_mlp(xb, cb);
+  gb.keep(mb.output);
+  gb.set_loss(mse(mb.output, tb));
+  Executor eb(test::runtime(), gb);
+  eb.set(xb, x);
+  eb.set(tb, t);
+  eb.forward();
+  eb.backward();
+  const auto yb = eb.get(mb.output);
+
+  for (size_t n = 0; n < nets; ++n) {
+    Graph g;
+    Tensor xs = g.input("x", Shape{rows, in});
+    Tensor ts = g.input("t", Shape{rows, static_cast<size_t>(c.outputs)});
+    const Mlp ms = build_mlp(xs, c);
+    g.keep(ms.output);
+    g.set_loss(mse(ms.output, ts));
+    Executor es(test::runtime(), g);
+    const auto slice = [&](const std::vector<float>& v, size_t per) {
+      return std::vector<float>(v.begin() + n * per, v.begin() + (n + 1) * per);
+    };
+    const std::vector<Tensor> pb = gb.parameters(), ps = g.parameters();
+    BOOST_REQUIRE_EQUAL(pb.size(), ps.size());
+    for (size_t i = 0; i < ps.size(); ++i)
+      es.set(ps[i], slice(eb.get(pb[i]), ps[i].shape().numel()));
+    es.set(xs, slice(x, rows * in));
+    es.set(ts, slice(t, rows * c.outputs));
+    es.forward();
+    es.backward();
+    expect_close(es.get(ms.output), test::to_double(slice(yb, rows * c.outputs)), 1e-6, 1e-5,
+                 "network " + std::to_string(n) + " output");
+    // The batched loss is the mean over both networks: its gradients are half the single ones.
+    for (size_t i = 0; i < ps.size(); ++i) {
+      std::vector<double> half;
+      for (float v : es.get_grad(ps[i])) half.push_back(0.5 * v);
+      expect_close(slice(eb.get_grad(pb[i]), ps[i].shape().numel()), half, 1e-6, 1e-4,
+                   "gradient of " + ps[i].info().name);
+    }
+  }
+}
+
 BOOST_AUTO_TEST_CASE(adam_matches_reference) {
   Runtime& rt = test::runtime();
   const size_t n = 1000;

@@ -147,8 +147,4 @@ DeviceInfo select_device(const std::string& selector_arg) {
               found_summary(all) + " (see `nova devices`)");
 }
 
-void use_pocl_cache_dir(const std::string& dir) {
-  if (!std::getenv("POCL_CACHE_DIR")) setenv("POCL_CACHE_DIR", dir.c_str(), 0);
-}
-
 }  // namespace nova

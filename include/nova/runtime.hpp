@@ -47,10 +47,6 @@ std::vector<DeviceInfo> list_devices();
 // install when nothing matches.
 DeviceInfo select_device(const std::string& selector = "");
 
-// Points PoCL's kernel compile cache at `dir` unless POCL_CACHE_DIR is already set. Must run
-// before the first OpenCL call of the process to take effect.
-void use_pocl_cache_dir(const std::string& dir);
-
 class Buffer {
  public:
   Buffer() = default;
