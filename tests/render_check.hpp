@@ -46,6 +46,59 @@ inline double reference_loss(const RenderRefInput& in, const RenderTargets& t) {
          mean_sq(o.depth, t.depth) + mean_sq(o.acc, t.acc);
 }
 
+// The part of reference_loss that depends on ray r (rays are independent), with the
+// normalisation of the whole loss: finite differences then cost one ray, not all of them.
+struct RayProblem {
+  RenderRefInput in;
+  RenderTargets t;
+  double weights[5];  // 1 / element count of each whole output
+};
+
+inline RayProblem ray_problem(const RenderRefInput& in, const RenderTargets& t, int r) {
+  const size_t N = in.nerfs, R = in.rays, S = in.samples, C = in.channels;
+  RayProblem p;
+  p.in = in;
+  p.in.rays = 1;
+  p.in.raw.clear();
+  p.in.delta.clear();
+  p.in.noise.clear();
+  const bool per_nerf = in.delta.size() == N * R * S;
+  for (size_t n = 0; n < N; ++n) {
+    const size_t at = (n * R + r) * S;
+    p.in.raw.insert(p.in.raw.end(), in.raw.begin() + at * C, in.raw.begin() + (at + S) * C);
+    if (!in.noise.empty())
+      p.in.noise.insert(p.in.noise.end(), in.noise.begin() + at, in.noise.begin() + at + S);
+    if (per_nerf || n == 0) {
+      const size_t d = per_nerf ? at : r * S;
+      p.in.delta.insert(p.in.delta.end(), in.delta.begin() + d, in.delta.begin() + d + S);
+    }
+  }
+  p.in.z.assign(in.z.begin() + r * S, in.z.begin() + (r + 1) * S);
+  p.t.rgb.assign(t.rgb.begin() + r * 3, t.rgb.begin() + r * 3 + 3);
+  for (size_t n = 0; n < N; ++n) {
+    p.t.nerf_rgb.insert(p.t.nerf_rgb.end(), t.nerf_rgb.begin() + (n * R + r) * 3,
+                        t.nerf_rgb.begin() + (n * R + r) * 3 + 3);
+    p.t.mask.push_back(t.mask[n * R + r]);
+  }
+  p.t.depth = {t.depth[r]};
+  p.t.acc = {t.acc[r]};
+  const double sizes[5] = {3.0 * R, 3.0 * N * R, 1.0 * N * R, 1.0 * R, 1.0 * R};
+  for (int k = 0; k < 5; ++k) p.weights[k] = 1.0 / sizes[k];
+  return p;
+}
+
+inline double ray_loss(const RayProblem& p) {
+  const RenderRefOutput o = render_reference(p.in);
+  const auto sq = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double s = 0;
+    for (size_t i = 0; i < a.size(); ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
+    return s;
+  };
+  return p.weights[0] * sq(o.rgb, p.t.rgb) + p.weights[1] * sq(o.nerf_rgb, p.t.nerf_rgb) +
+         p.weights[2] * sq(o.mask, p.t.mask) + p.weights[3] * sq(o.depth, p.t.depth) +
+         p.weights[4] * sq(o.acc, p.t.acc);
+}
+
 struct DeviceRender {
   std::vector<float> rgb, nerf_rgb, mask, depth, acc, grad_raw;
 };
@@ -109,6 +162,12 @@ inline void expect_forward_close(const DeviceRender& d, const RenderRefInput& in
   for (double z : in.z) zmax = std::max(zmax, std::fabs(z));
   for (const auto* v : {&d.rgb, &d.nerf_rgb, &d.mask, &d.depth, &d.acc})
     BOOST_TEST(all_finite(*v), what << ": non-finite output");
+  double worst = 0;
+  for (auto [a, b] : {std::pair{&d.rgb, &o.rgb}, {&d.nerf_rgb, &o.nerf_rgb}, {&d.mask, &o.mask},
+                      {&d.acc, &o.acc}})
+    worst = std::max(worst, max_scaled_error(*a, *b, atol, rtol));
+  worst = std::max(worst, max_scaled_error(d.depth, o.depth, atol * zmax, rtol));
+  BOOST_TEST_MESSAGE(what << ": worst forward error " << worst << " of the tolerance");
   expect_close(d.rgb, o.rgb, atol, rtol, what + " rgb");
   expect_close(d.nerf_rgb, o.nerf_rgb, atol, rtol, what + " nerf_rgb");
   expect_close(d.mask, o.mask, atol, rtol, what + " mask");
@@ -123,29 +182,41 @@ inline void expect_forward_close(const DeviceRender& d, const RenderRefInput& in
 // rtol |fd| + atol * g * m_e, with g the largest |gradient| over the rgb and blend channels
 // (the scale of the upstream gradients) and m_e = max(1, delta_e) for sigma entries, because
 // d alpha / d sigma = delta exp(-sigma delta) multiplies every float32 rounding error there.
-inline void expect_gradient_close(const DeviceRender& d, RenderRefInput in,
+// sample_stride > 1 checks the first and last 16 samples and every sample_stride-th between
+// (the float64 differences dominate the run time of long rays).
+inline void expect_gradient_close(const DeviceRender& d, const RenderRefInput& in,
                                   const RenderTargets& t, double atol, double rtol,
-                                  const std::string& what) {
+                                  const std::string& what, size_t sample_stride = 1) {
   const size_t N = in.nerfs, R = in.rays, S = in.samples, C = in.channels;
   BOOST_TEST(all_finite(d.grad_raw), what << ": non-finite gradient");
   const bool per_nerf = in.delta.size() == N * R * S;
   std::vector<double> fd(in.raw.size(), 0.0), m(in.raw.size(), 1.0);
-  for (size_t e = 0; e < in.raw.size(); ++e) {
-    const size_t sample = e / C, ch = e % C;
-    const double x0 = in.raw[e];
-    double h = std::max(1e-9, 1e-6 * std::fabs(x0));
-    if (ch == 3) {
-      const double dl = in.delta[per_nerf ? sample : sample % (R * S)];
-      h = std::min(h, std::max(1e-4 / dl, 1e-300));
-      m[e] = std::max(1.0, dl);
-    }
-    if (ch >= 5) continue;  // ignored channels: the reference gradient is exactly 0
-    in.raw[e] = x0 + h;
-    const double lp = reference_loss(in, t);
-    in.raw[e] = x0 - h;
-    const double lm = reference_loss(in, t);
-    in.raw[e] = x0;
-    fd[e] = (lp - lm) / (2 * h);
+  std::vector<bool> checked(in.raw.size(), true);
+  for (size_t r = 0; r < R; ++r) {
+    RayProblem p = ray_problem(in, t, static_cast<int>(r));
+    for (size_t n = 0; n < N; ++n)
+      for (size_t local = n * S * C; local < (n + 1) * S * C; ++local) {
+        const size_t i = (local / C) % S, sample = (n * R + r) * S + i, ch = local % C;
+        const size_t e = sample * C + ch;
+        if (ch >= 5) continue;  // ignored channels: the reference gradient is exactly 0
+        if (i >= 16 && i + 16 < S && i % sample_stride) {
+          checked[e] = false;
+          continue;
+        }
+        const double x0 = p.in.raw[local];
+        double h = std::max(1e-9, 1e-6 * std::fabs(x0));
+        if (ch == 3) {
+          const double dl = in.delta[per_nerf ? sample : sample % (R * S)];
+          h = std::min(h, std::max(1e-4 / dl, 1e-300));
+          m[e] = std::max(1.0, dl);
+        }
+        p.in.raw[local] = x0 + h;
+        const double lp = ray_loss(p);
+        p.in.raw[local] = x0 - h;
+        const double lm = ray_loss(p);
+        p.in.raw[local] = x0;
+        fd[e] = (lp - lm) / (2 * h);
+      }
   }
   double g = 1e-12;
   for (size_t e = 0; e < fd.size(); ++e)
@@ -153,12 +224,14 @@ inline void expect_gradient_close(const DeviceRender& d, RenderRefInput in,
   size_t worst_e = 0;
   double worst = 0;
   for (size_t e = 0; e < fd.size(); ++e) {
+    if (!checked[e]) continue;
     const double err = std::fabs(d.grad_raw[e] - fd[e]) / (rtol * std::fabs(fd[e]) + atol * g * m[e]);
     if (!(err <= worst)) {
       worst = std::isnan(err) ? INFINITY : err;
       worst_e = e;
     }
   }
+  BOOST_TEST_MESSAGE(what << ": worst gradient error " << worst << " of the tolerance");
   BOOST_TEST(worst <= 1.0, what << ": d loss / d raw[" << worst_e << "] (channel "
                                 << worst_e % C << ") is " << d.grad_raw[worst_e]
                                 << ", float64 finite difference " << fd[worst_e]);

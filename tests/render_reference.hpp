@@ -2,6 +2,7 @@
 // Float64 host reference of the compositing renderer, written straight from the formulas
 // (DESIGN.md, "Compositing") and independent of kernels/render.cl: no union-of-probabilities
 // trick, no reverse scan; gradients come from central differences of this function.
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -31,11 +32,11 @@ inline RenderRefOutput render_reference(const RenderRefInput& in) {
   out.mask.assign(N * R, 0.0);
   out.depth.assign(R, 0.0);
   out.acc.assign(R, 0.0);
+  std::vector<double> Tn(N), alpha(N), blend(N), c(N * 3);
   for (int r = 0; r < R; ++r) {
     double T = 1.0;
-    std::vector<double> Tn(N, 1.0);
+    std::fill(Tn.begin(), Tn.end(), 1.0);
     for (int i = 0; i < S; ++i) {
-      std::vector<double> alpha(N), blend(N), c(N * 3);
       for (int n = 0; n < N; ++n) {
         const size_t at = (static_cast<size_t>(n) * R + r) * S + i;
         const double* p = &in.raw[at * C];
