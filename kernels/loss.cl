@@ -37,3 +37,118 @@ __kernel void scalar_axpy(__global const float* x, __global float* out, float w,
   if (get_global_id(0) != 0) return;
   out[0] = accumulate ? out[0] + w * x[0] : w * x[0];
 }
+
+// ---- novel-view losses (render.hpp / losses.hpp) ---------------------------------------------
+// Raw field rows are [rgb(3), sigma, blend, ...] of C channels (kRaw* in render.hpp); `act`
+// says whether the blend channel still needs its sigmoid.
+
+inline float loss_blend(float raw, int act) { return act ? 1.0f / (1.0f + exp(-raw)) : raw; }
+inline float loss_blend_slope(float b, int act) { return act ? b * (1.0f - b) : 1.0f; }
+
+// Masked squared error, pred [G, R, K], target [R, K], mask [G, R]:
+// partial[p] = sum over elements e = p, p + parts, ... of mask (pred - target)^2.
+__kernel void masked_sq_err_partial(__global const float* pred, __global const float* target,
+                                    __global const float* mask, __global float* partial, uint n,
+                                    uint R, uint K, uint parts) {
+  const uint p = get_global_id(0);
+  if (p >= parts) return;
+  const uint rk = R * K;
+  float s = 0.0f;
+  for (uint e = p; e < n; e += parts) {
+    const float d = pred[e] - target[e % rk];
+    s += mask[e / K] * d * d;
+  }
+  partial[p] = s;
+}
+
+// grad_pred (+)= gloss * scale * mask (pred - target), scale = 2 / n.
+__kernel void masked_sq_err_backward(__global const float* pred, __global const float* target,
+                                     __global const float* mask, __global const float* gloss,
+                                     __global float* grad, uint n, uint R, uint K, float scale,
+                                     int accumulate) {
+  const uint e = get_global_id(0);
+  if (e >= n) return;
+  const float g = gloss[0] * scale * mask[e / K] * (pred[e] - target[e % (R * K)]);
+  grad[e] = accumulate ? grad[e] + g : g;
+}
+
+// Blending loss, raw [N, M, C]: partial[p] = sum over samples m = p, p + parts, ... of
+// |sum_n blend_n(m) - 1|.
+__kernel void blend_sum_partial(__global const float* raw, __global float* partial, uint N,
+                                uint M, uint C, int act, uint parts) {
+  const uint p = get_global_id(0);
+  if (p >= parts) return;
+  float s = 0.0f;
+  for (uint m = p; m < M; m += parts) {
+    float b = 0.0f;
+    for (uint n = 0; n < N; ++n) b += loss_blend(raw[((size_t)n * M + m) * C + 4], act);
+    s += fabs(b - 1.0f);
+  }
+  partial[p] = s;
+}
+
+// One work-item per raw element: the blend channel gets gloss * scale * sign(sum - 1) *
+// blend', every other channel 0 (the loss does not read it). sign(0) = 0.
+__kernel void blend_sum_backward(__global const float* raw, __global const float* gloss,
+                                 __global float* grad, uint N, uint M, uint C, int act,
+                                 float scale, int accumulate) {
+  const uint e = get_global_id(0);
+  if (e >= N * M * C) return;
+  float g = 0.0f;
+  if (e % C == 4) {
+    const uint m = (e / C) % M;
+    float b = 0.0f;
+    for (uint n = 0; n < N; ++n) b += loss_blend(raw[((size_t)n * M + m) * C + 4], act);
+    const float mine = loss_blend(raw[e], act);
+    g = gloss[0] * scale * sign(b - 1.0f) * loss_blend_slope(mine, act);
+  }
+  grad[e] = accumulate ? grad[e] + g : g;
+}
+
+// Alpha loss over the object NeRFs n >= 1, raw [N, R*S, C], delta [R, S] or [N, R, S]
+// (delta_stride 0 or R*S), noise [N, R, S] (use_noise), mask [N, R]:
+// partial[p] = sum over (n >= 1, r, i) = p, p + parts, ... of (1 - mask_n(r)) (alpha + blend),
+// alpha = 1 - exp(-ReLU(sigma + noise) delta).
+__kernel void alpha_outside_partial(__global const float* raw, __global const float* delta,
+                                    __global const float* noise, __global const float* mask,
+                                    __global float* partial, uint N, uint R, uint S, uint C,
+                                    uint delta_stride, int use_noise, int act, uint parts) {
+  const uint p = get_global_id(0);
+  if (p >= parts) return;
+  const uint rs = R * S, n_items = (N - 1) * rs;
+  float s = 0.0f;
+  for (uint q = p; q < n_items; q += parts) {
+    const uint e = rs + q;  // skips NeRF 0
+    const uint n = e / rs, at = e % rs;
+    const float outside = 1.0f - mask[n * R + at / S];
+    const float sigma = fmax(raw[(size_t)e * C + 3] + (use_noise ? noise[e] : 0.0f), 0.0f);
+    const float alpha = -expm1(-sigma * delta[n * delta_stride + at]);
+    s += outside * (alpha + loss_blend(raw[(size_t)e * C + 4], act));
+  }
+  partial[p] = s;
+}
+
+__kernel void alpha_outside_backward(__global const float* raw, __global const float* delta,
+                                     __global const float* noise, __global const float* mask,
+                                     __global const float* gloss, __global float* grad, uint N,
+                                     uint R, uint S, uint C, uint delta_stride, int use_noise,
+                                     int act, float scale, int accumulate) {
+  const uint e = get_global_id(0);
+  if (e >= N * R * S * C) return;
+  const uint sample = e / C, ch = e % C, rs = R * S;
+  const uint n = sample / rs, at = sample % rs;
+  float g = 0.0f;
+  if (n >= 1 && (ch == 3 || ch == 4)) {
+    const float w = gloss[0] * scale * (1.0f - mask[n * R + at / S]);
+    if (ch == 3) {
+      const float s = raw[e] + (use_noise ? noise[sample] : 0.0f);
+      const float d = delta[n * delta_stride + at];
+      const float t = exp(-fmax(s, 0.0f) * d);
+      // d alpha / d sigma = delta exp(-sigma delta), 0 once exp underflows, 0 below the ReLU.
+      g = s > 0.0f && t > 0.0f ? w * t * d : 0.0f;
+    } else {
+      g = w * loss_blend_slope(loss_blend(raw[e], act), act);
+    }
+  }
+  grad[e] = accumulate ? grad[e] + g : g;
+}

@@ -1,0 +1,58 @@
+#pragma once
+// The NOVA training losses as graph ops, and the builder that assembles the weighted total.
+// A term whose weight is 0 is not built into the graph at all (no op, no kernel, no memory).
+#include "nova/graph.hpp"
+#include "nova/render.hpp"
+
+namespace nova {
+
+// Mean over all G*R*K elements of mask * (pred - target)^2.
+// pred [G, R, K] or [R, K]; target [R, K] (shared by the G groups); mask [G, R] or [R].
+// target and mask are data (no gradient).
+Tensor masked_mse(Tensor pred, Tensor target, Tensor mask);
+
+// Blending loss: mean over the M samples of |sum_n blend_n - 1|, raw [N, M, C] (kRawBlend
+// channel; sigmoid applied here when blend_sigmoid, as render_composite does).
+Tensor blending_loss(Tensor raw, bool blend_sigmoid = true);
+
+// Alpha loss: alpha and blend of each object NeRF (n >= 1) pushed to 0 on rays outside its
+// mask: sum over n >= 1, rays r, samples i of (1 - mask_n(r)) (alpha_n,i + blend_n,i), divided
+// by K*R*S. An L1 penalty (both terms are >= 0), which drives them to exactly 0.
+// raw [N, R*S, C], delta [R, S] or [N, R, S] and noise (optional) as render_composite;
+// masks [N, R] as NovelViewTargets. The static NeRF (n = 0) is exempt: the background
+// exists behind the objects too. Needs N >= 2.
+Tensor alpha_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {},
+                  bool blend_sigmoid = true);
+
+// The reference code's weights (DESIGN.md, "Loss weights").
+struct NovelViewLossWeights {
+  float full_rgb = 3.0f;  // mse(composite rgb, target rgb)
+  float nerf_rgb = 1.0f;  // masked_mse(nerf_rgb, target rgb, masks): each NeRF in its region
+  float mask = 0.1f;      // mse(M_n, masks): rendered per-NeRF masks against the masks
+  float blending = 0.1f;  // blending_loss
+  float alpha = 0.1f;     // alpha_loss (only built when there is an object NeRF)
+};
+
+struct NovelViewTargets {
+  Tensor rgb;    // [R, 3] target colour of the (possibly warped) view
+  Tensor masks;  // [N, R] masks[0] = background (1 - union of objects), masks[n] = object n
+};
+
+struct NovelViewLoss {
+  Tensor total;  // scalar weighted sum of the present terms: pass to Graph::set_loss
+  // Each term, unweighted (for logs); invalid (Tensor{}) when its weight is 0.
+  Tensor full_rgb, nerf_rgb, mask, blending, alpha;
+};
+
+// Builds the weighted loss of one render (raw/delta/noise/options: those given to
+// render_composite). Throws when every weight is 0.
+NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor delta,
+                              Tensor noise, const NovelViewTargets& targets,
+                              const NovelViewLossWeights& weights = {},
+                              const RenderOptions& options = {});
+
+// Pretraining of the static NeRF alone (rendered with N = 1): mse of its colour against the
+// target, restricted to background pixels when `background` ([R], 1 = background) is given.
+Tensor pretrain_rgb_loss(Tensor rgb, Tensor target, Tensor background = {});
+
+}  // namespace nova

@@ -1,0 +1,286 @@
+// The novel-view losses: each op against a float64 host reference and a finite-difference
+// check, the weighted builder against the sum of its terms, and a weight of 0 leaving its
+// term out of the graph.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <set>
+
+#include "harness.hpp"
+#include "nova/losses.hpp"
+#include "nova/ops.hpp"
+#include "nova/render.hpp"
+
+using namespace nova;
+using namespace nova::test;
+
+namespace {
+
+double sigmoid(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+// Runs a graph whose output is one scalar and returns it.
+double device_scalar(Graph& g, Tensor y, const std::vector<std::pair<Tensor, std::vector<float>>>& in) {
+  g.keep(y);
+  Executor ex(runtime(), g);
+  for (const auto& [t, v] : in) ex.set(t, v);
+  ex.forward();
+  return ex.get(y).at(0);
+}
+
+// Raw [N, R*S, 5] with blend raw values in [1, 3] (so that sum_n sigmoid(blend) - 1 stays
+// >= 0.46 away from the kink of |.| for N >= 2 and finite differences never cross it) and
+// sigma raw values in +-[0.1, 2] (away from the ReLU kink by more than the FD step 1e-2).
+std::vector<float> smooth_raw(size_t nerfs, size_t rs, unsigned seed) {
+  auto raw = random_floats(nerfs * rs * 5, -2, 2, seed);
+  const auto u = random_floats(nerfs * rs * 2, 0, 1, seed + 1);
+  for (size_t s = 0; s < nerfs * rs; ++s) {
+    raw[s * 5 + 4] = 1.0f + 2.0f * u[2 * s];
+    const float mag = 0.1f + 1.9f * u[2 * s + 1];
+    raw[s * 5 + 3] = (s % 3 == 0) ? -mag : mag;
+  }
+  return raw;
+}
+
+// Float64 references, straight from the definitions in losses.hpp.
+double ref_masked_mse(const std::vector<float>& pred, const std::vector<float>& target,
+                      const std::vector<float>& mask, size_t G, size_t R, size_t K) {
+  double s = 0;
+  for (size_t g = 0; g < G; ++g)
+    for (size_t r = 0; r < R; ++r)
+      for (size_t k = 0; k < K; ++k) {
+        const double d = pred[(g * R + r) * K + k] - double(target[r * K + k]);
+        s += mask[g * R + r] * d * d;
+      }
+  return s / double(G * R * K);
+}
+
+double ref_blending(const std::vector<float>& raw, size_t N, size_t M) {
+  double s = 0;
+  for (size_t m = 0; m < M; ++m) {
+    double b = 0;
+    for (size_t n = 0; n < N; ++n) b += sigmoid(raw[(n * M + m) * 5 + 4]);
+    s += std::fabs(b - 1);
+  }
+  return s / double(M);
+}
+
+double ref_alpha(const std::vector<float>& raw, const std::vector<float>& delta,
+                 const std::vector<float>& masks, size_t N, size_t R, size_t S) {
+  double s = 0;
+  for (size_t n = 1; n < N; ++n)
+    for (size_t r = 0; r < R; ++r)
+      for (size_t i = 0; i < S; ++i) {
+        const size_t at = (n * R + r) * S + i;
+        const double sigma = std::max(0.0, double(raw[at * 5 + 3]));
+        const double alpha = 1 - std::exp(-sigma * delta[r * S + i]);
+        s += (1 - masks[n * R + r]) * (alpha + sigmoid(raw[at * 5 + 4]));
+      }
+  return s / double((N - 1) * R * S);
+}
+
+// Losses are single float32 sums of at most a few thousand terms of size O(1): relative
+// error about n * 6e-8 in the worst case, 1e-6 in practice with the two-stage sum; rtol 1e-5
+// with atol 1e-7 is tight enough to catch a wrong normalisation or a missed term.
+constexpr double kAtol = 1e-7, kRtol = 1e-5;
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(losses)
+
+BOOST_AUTO_TEST_CASE(masked_mse_matches_reference) {
+  const size_t G = 3, R = 50, K = 3;
+  const auto pred = random_floats(G * R * K, 0, 1, 1), target = random_floats(R * K, 0, 1, 2);
+  auto mask = random_floats(G * R, 0, 1, 3);
+  for (float& m : mask) m = m < 0.4f ? 0.0f : m < 0.8f ? 1.0f : m;  // binary and soft
+  Graph g;
+  Tensor p = g.input("pred", Shape{G, R, K}), t = g.input("target", Shape{R, K}),
+         m = g.input("mask", Shape{G, R});
+  const double v = device_scalar(g, masked_mse(p, t, m), {{p, pred}, {t, target}, {m, mask}});
+  expect_close({static_cast<float>(v)}, {ref_masked_mse(pred, target, mask, G, R, K)}, kAtol,
+               kRtol, "masked_mse");
+  // Harness FD check (default tolerance, see harness.hpp): the loss is quadratic in pred, so
+  // central differences are exact up to float32 rounding.
+  check_gradients(
+      [&](Graph& gg) {
+        Tensor pp = gg.input("pred", Shape{G, R, K}, true), tt = gg.input("target", Shape{R, K}),
+               mm = gg.input("mask", Shape{G, R});
+        return OpUnderTest{{pp, tt, mm}, masked_mse(pp, tt, mm)};
+      },
+      {pred, target, mask});
+}
+
+BOOST_AUTO_TEST_CASE(blending_loss_matches_reference) {
+  const size_t N = 3, M = 40;
+  auto raw = smooth_raw(N, M, 4);
+  // Some samples with the sum below 1 (blend raw -3: sigmoid 0.047 each, sum 0.14) to cover
+  // both signs of |sum - 1|.
+  for (size_t m = 0; m < M; m += 4)
+    for (size_t n = 0; n < N; ++n) raw[(n * M + m) * 5 + 4] = -3.0f;
+  Graph g;
+  Tensor r = g.input("raw", Shape{N, M, 5});
+  const double v = device_scalar(g, blending_loss(r), {{r, raw}});
+  expect_close({static_cast<float>(v)}, {ref_blending(raw, N, M)}, kAtol, kRtol, "blending_loss");
+  check_gradients(
+      [&](Graph& gg) {
+        Tensor rr = gg.input("raw", Shape{N, M, 5}, true);
+        return OpUnderTest{{rr}, blending_loss(rr)};
+      },
+      {raw});
+}
+
+BOOST_AUTO_TEST_CASE(alpha_loss_matches_reference) {
+  const size_t N = 3, R = 6, S = 8;
+  const auto raw = smooth_raw(N, R * S, 5);
+  const auto delta = random_floats(R * S, 0.05f, 0.5f, 6);
+  auto masks = random_floats(N * R, 0, 1, 7);
+  for (float& m : masks) m = m < 0.5f ? 0.0f : 1.0f;
+  Graph g;
+  Tensor r = g.input("raw", Shape{N, R * S, 5}), d = g.input("delta", Shape{R, S}),
+         m = g.input("masks", Shape{N, R});
+  const double v = device_scalar(g, alpha_loss(r, d, m), {{r, raw}, {d, delta}, {m, masks}});
+  expect_close({static_cast<float>(v)}, {ref_alpha(raw, delta, masks, N, R, S)}, kAtol, kRtol,
+               "alpha_loss");
+  check_gradients(
+      [&](Graph& gg) {
+        Tensor rr = gg.input("raw", Shape{N, R * S, 5}, true), dd = gg.input("delta", Shape{R, S}),
+               mm = gg.input("masks", Shape{N, R});
+        return OpUnderTest{{rr, dd, mm}, alpha_loss(rr, dd, mm)};
+      },
+      {raw, delta, masks});
+  // The static NeRF is exempt: its rows get an exactly zero gradient.
+  Graph g2;
+  Tensor r2 = g2.input("raw", Shape{N, R * S, 5}, true), d2 = g2.input("delta", Shape{R, S}),
+         m2 = g2.input("masks", Shape{N, R});
+  g2.set_loss(alpha_loss(r2, d2, m2));
+  Executor ex(runtime(), g2);
+  ex.set(r2, raw);
+  ex.set(d2, delta);
+  ex.set(m2, masks);
+  ex.forward();
+  ex.backward();
+  const auto grad = ex.get_grad(r2);
+  for (size_t e = 0; e < R * S * 5; ++e) BOOST_TEST(grad[e] == 0.0f);
+}
+
+namespace {
+
+// A whole novel-view graph: raw -> render_composite -> novel_view_loss.
+struct LossGraph {
+  Graph g;
+  Tensor raw, delta, z, rgb, masks;
+  NovelViewLoss loss;
+};
+
+void build_loss_graph(LossGraph& lg, size_t N, size_t R, size_t S, const NovelViewLossWeights& w) {
+  Graph& g = lg.g;
+  lg.raw = g.input("raw", Shape{N, R * S, 5}, true);
+  lg.delta = g.input("delta", Shape{R, S});
+  lg.z = g.input("z", Shape{R, S});
+  lg.rgb = g.input("target_rgb", Shape{R, 3});
+  lg.masks = g.input("masks", Shape{N, R});
+  const RenderOutputs out = render_composite(lg.raw, lg.delta, lg.z);
+  lg.loss = novel_view_loss(out, lg.raw, lg.delta, Tensor{}, {lg.rgb, lg.masks}, w);
+  g.set_loss(lg.loss.total);
+}
+
+std::multiset<std::string> op_types(const Graph& g) {
+  std::multiset<std::string> s;
+  for (size_t n = 0; n < g.node_count(); ++n) s.insert(g.node(n).type());
+  return s;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_CASE(zero_weight_terms_are_not_built) {
+  const size_t N = 3, R = 4, S = 8;
+  LossGraph all;
+  build_loss_graph(all, N, R, S, {});
+  // render + mse (full rgb) + masked_mse + mse (mask) + blending + alpha + weighted_sum.
+  BOOST_TEST(all.g.node_count() == 7u);
+  const std::pair<float NovelViewLossWeights::*, std::string> terms[] = {
+      {&NovelViewLossWeights::full_rgb, "mse"},
+      {&NovelViewLossWeights::nerf_rgb, "masked_mse"},
+      {&NovelViewLossWeights::mask, "mse"},
+      {&NovelViewLossWeights::blending, "blending_loss"},
+      {&NovelViewLossWeights::alpha, "alpha_loss"}};
+  for (const auto& [field, type] : terms) {
+    NovelViewLossWeights w;
+    w.*field = 0.0f;
+    LossGraph lg;
+    build_loss_graph(lg, N, R, S, w);
+    BOOST_TEST(lg.g.node_count() == 6u, "weight of " << type << " set to 0");
+    const auto a = op_types(all.g), b = op_types(lg.g);
+    BOOST_TEST(a.count(type) == b.count(type) + 1, type << " still built with weight 0");
+  }
+  // Without object NeRFs the alpha loss has nothing to act on and is never built.
+  LossGraph single;
+  build_loss_graph(single, 1, R, S, {});
+  BOOST_TEST(op_types(single.g).count("alpha_loss") == 0u);
+  BOOST_TEST(!single.loss.alpha.valid());
+  // Every weight 0 is a configuration error, not an empty loss.
+  NovelViewLossWeights none{0, 0, 0, 0, 0};
+  LossGraph empty;
+  BOOST_CHECK_THROW(build_loss_graph(empty, N, R, S, none), Error);
+}
+
+BOOST_AUTO_TEST_CASE(weighted_total_and_gradient) {
+  const size_t N = 2, R = 4, S = 8;
+  NovelViewLossWeights w;  // the reference weights 3, 1, 0.1, 0.1, 0.1
+  LossGraph lg;
+  build_loss_graph(lg, N, R, S, w);
+  const NovelViewLoss& l = lg.loss;
+  for (Tensor t : {l.full_rgb, l.nerf_rgb, l.mask, l.blending, l.alpha}) lg.g.keep(t);
+  const auto raw = smooth_raw(N, R * S, 9);
+  std::vector<float> delta(R * S, 1.0f / S), z(R * S);
+  for (size_t e = 0; e < R * S; ++e) z[e] = (e % S + 0.5f) / S;
+  const auto rgb = random_floats(R * 3, 0, 1, 10);
+  auto masks = random_floats(N * R, 0, 1, 11);
+  for (float& m : masks) m = m < 0.5f ? 0.0f : 1.0f;
+  Executor ex(runtime(), lg.g);
+  ex.set(lg.raw, raw);
+  ex.set(lg.delta, delta);
+  ex.set(lg.z, z);
+  ex.set(lg.rgb, rgb);
+  ex.set(lg.masks, masks);
+  ex.forward();
+  const double expected = 3.0 * ex.get(l.full_rgb)[0] + 1.0 * ex.get(l.nerf_rgb)[0] +
+                          0.1 * ex.get(l.mask)[0] + 0.1 * ex.get(l.blending)[0] +
+                          0.1 * ex.get(l.alpha)[0];
+  expect_close({ex.loss()}, {expected}, kAtol, kRtol, "weighted total");
+  // The terms that need only raw are checked against their float64 references too.
+  expect_close(ex.get(l.blending), {ref_blending(raw, N, R * S)}, kAtol, kRtol, "blending term");
+  expect_close(ex.get(l.alpha), {ref_alpha(raw, delta, masks, N, R, S)}, kAtol, kRtol, "alpha term");
+
+  // The whole chain render -> losses, by float32 central differences of the device forward
+  // (harness default tolerance).
+  check_gradients(
+      [&](Graph& g) {
+        Tensor r = g.input("raw", Shape{N, R * S, 5}, true), d = g.input("delta", Shape{R, S}),
+               zz = g.input("z", Shape{R, S}), t = g.input("target_rgb", Shape{R, 3}),
+               m = g.input("masks", Shape{N, R});
+        const RenderOutputs out = render_composite(r, d, zz);
+        return OpUnderTest{{r, d, zz, t, m}, novel_view_loss(out, r, d, Tensor{}, {t, m}, w).total};
+      },
+      {raw, delta, z, rgb, masks});
+}
+
+BOOST_AUTO_TEST_CASE(pretrain_rgb_loss_is_plain_or_background_mse) {
+  const size_t R = 30;
+  const auto pred = random_floats(R * 3, 0, 1, 12), target = random_floats(R * 3, 0, 1, 13);
+  auto bg = random_floats(R, 0, 1, 14);
+  for (float& b : bg) b = b < 0.3f ? 0.0f : 1.0f;
+  Graph g;
+  Tensor p = g.input("rgb", Shape{R, 3}), t = g.input("target", Shape{R, 3}), b = g.input("bg", Shape{R});
+  Tensor plain = pretrain_rgb_loss(p, t), masked = pretrain_rgb_loss(p, t, b);
+  g.keep(plain);
+  g.keep(masked);
+  Executor ex(runtime(), g);
+  ex.set(p, pred);
+  ex.set(t, target);
+  ex.set(b, bg);
+  ex.forward();
+  const std::vector<float> ones(R, 1.0f);
+  expect_close(ex.get(plain), {ref_masked_mse(pred, target, ones, 1, R, 3)}, kAtol, kRtol, "plain");
+  expect_close(ex.get(masked), {ref_masked_mse(pred, target, bg, 1, R, 3)}, kAtol, kRtol, "background");
+}
+
+BOOST_AUTO_TEST_SUITE_END()
