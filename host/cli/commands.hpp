@@ -10,6 +10,8 @@ using Args = std::vector<std::string>;
 
 int devices(const Args& args);
 int train_mlp(const Args& args);
+int scene(const Args& args);
+int synth(const Args& args);
 
 struct Command {
   const char* name;

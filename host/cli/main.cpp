@@ -15,6 +15,8 @@ const std::vector<Command>& commands() {
       {"devices", "list OpenCL platforms and devices", devices},
       {"train-mlp", "fit the reference MLP to a smooth 3D function (a runtime smoke test)",
        train_mlp},
+      {"scene", "load a scene folder and print its summary and load time", scene},
+      {"synth", "write a synthetic NOVA scene with ground truth", synth},
   };
   return all;
 }

@@ -1,0 +1,97 @@
+#pragma once
+// Helpers for the data-layer suites: unique temporary folders under /tmp and a cached tiny
+// synthetic scene that tests copy and then damage.
+#include <boost/test/unit_test.hpp>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <unistd.h>
+
+#include "nova/error.hpp"
+#include "nova/synth.hpp"
+
+namespace nova::test {
+
+namespace fs = std::filesystem;
+
+// A fresh folder, removed with everything in it when the object goes away.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& tag) {
+    std::random_device rd;
+    path_ = fs::temp_directory_path() /
+            ("nova-" + tag + "-" + std::to_string(::getpid()) + "-" + std::to_string(rd()));
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return path_; }
+  fs::path operator/(const std::string& s) const { return path_ / s; }
+
+ private:
+  fs::path path_;
+};
+
+// The tiny synthetic scene (seed 7), generated once per process; returns its folder.
+inline const fs::path& cached_tiny_scene() {
+  static TempDir dir("tiny-cache");
+  static const fs::path scene = [] {
+    const fs::path p = dir / "scene";
+    write_synthetic_scene(p.string(), "tiny", 7);
+    return p;
+  }();
+  return scene;
+}
+
+// A private copy of the tiny scene in `into`/scene, to modify.
+inline fs::path copy_tiny_scene(const TempDir& into) {
+  const fs::path dst = into / "scene";
+  fs::copy(cached_tiny_scene(), dst, fs::copy_options::recursive);
+  return dst;
+}
+
+inline std::string read_all(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+inline void write_all(const fs::path& p, const std::string& bytes) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out << bytes;
+}
+
+// Raw .npy bytes with any descr/shape text, for malformed-input tests.
+inline std::string npy_bytes(const std::string& descr, const std::string& shape,
+                             const std::string& payload, bool fortran = false) {
+  std::string dict = "{'descr': '" + descr + "', 'fortran_order': " +
+                     (fortran ? "True" : "False") + ", 'shape': " + shape + ", }";
+  while ((10 + dict.size() + 1) % 64) dict += ' ';
+  dict += '\n';
+  std::string out("\x93NUMPY\x01\x00", 8);
+  out += char(dict.size() & 0xff);
+  out += char(dict.size() >> 8);
+  return out + dict + payload;
+}
+
+// Runs `f`, expecting a nova::Error with exit code 2 whose message contains every string
+// in `parts`.
+template <class F>
+void expect_error(F&& f, const std::vector<std::string>& parts) {
+  try {
+    f();
+  } catch (const nova::Error& e) {
+    const std::string msg = e.what();
+    BOOST_TEST_MESSAGE("error: " << msg);
+    BOOST_TEST(e.exit_code() == 2);
+    for (const auto& p : parts) BOOST_TEST(msg.find(p) != std::string::npos, "'" << p << "' in: " << msg);
+    return;
+  }
+  BOOST_ERROR("expected a nova::Error");
+}
+
+}  // namespace nova::test

@@ -1,0 +1,260 @@
+// The scene readers on a tiny synthetic scene (exact expectations), the layout variants
+// (DynamicNeRF single mask folder, static-only, LLFF), and one test per bad-input case: each
+// must be a nova::Error with exit code 2 naming the file and the problem.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <limits>
+
+#include "nova/image_io.hpp"
+#include "nova/llff_poses.hpp"
+#include "nova/npy.hpp"
+#include "nova/scene_io.hpp"
+#include "scene_test_util.hpp"
+
+using namespace nova;
+using namespace nova::test;
+
+namespace {
+
+// Sets one value of poses_bounds.npy (row r, column c).
+void poke_pose(const fs::path& scene, size_t r, size_t c, double v) {
+  const auto file = (scene / "poses_bounds.npy").string();
+  NpyArray a = read_npy(file);
+  a.values[r * 17 + c] = v;
+  write_npy_f64(file, a.shape, a.values);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(scene_io)
+
+BOOST_AUTO_TEST_CASE(reads_synthetic_scene) {
+  const fs::path dir = cached_tiny_scene();
+  BOOST_TEST(detect_format(dir.string()) == "nova");
+  const Scene s = load_scene(dir.string());
+  const SynthWorld world("tiny", 7);
+  const int n = world.preset().frames;
+  BOOST_TEST(s.frames.size() == size_t(n));
+  BOOST_TEST(s.num_objects == 2);
+  BOOST_TEST(s.ndc);
+  BOOST_TEST(s.bd_factor == 0.9);
+  BOOST_TEST(s.gt_views.size() == size_t(3 * n));
+  BOOST_TEST(s.compose.targets.size() == 4u);
+  BOOST_TEST(s.compose_gt.size() == 4u);
+  for (int i = 0; i < n; ++i) {
+    const Frame& f = s.frames[i];
+    BOOST_TEST(f.time == frame_time(i, n));
+    BOOST_TEST(f.masks.size() == 3u);
+    BOOST_TEST(!f.disparity.empty());
+    BOOST_TEST(f.camera.width == 64);
+    BOOST_TEST(f.camera.fx == world.preset().focal);
+    // Pixels are exactly what the generator rendered (PNG is lossless).
+    const SynthRender r = world.render(world.camera(i), f.time);
+    BOOST_TEST((f.rgb.data == r.rgb.data));
+    for (int k = 0; k < 3; ++k) BOOST_TEST((f.masks[k].data == r.masks[k].data));
+    BOOST_TEST(f.near >= 1.0);  // scaled by 1 / (p5(near) * 0.9): NDC's near plane is 1
+  }
+  // Recentring puts the average camera at the origin, looking along -z.
+  double mean[3] = {0, 0, 0}, back[3] = {0, 0, 0};
+  for (const auto& f : s.frames)
+    for (int r = 0; r < 3; ++r) {
+      mean[r] += f.camera.position(r) / n;
+      back[r] += f.camera.rotation(r, 2);
+    }
+  for (int r = 0; r < 3; ++r) BOOST_TEST(std::abs(mean[r]) < 1e-9);
+  BOOST_TEST(std::abs(back[0]) < 1e-9);
+  BOOST_TEST(std::abs(back[1]) < 1e-9);
+  BOOST_TEST(back[2] > 0);
+  // Camera 0's ground-truth views share frame 0's processed camera.
+  for (int k = 0; k < 12; ++k)
+    BOOST_TEST(std::abs(s.gt_views[0].camera.c2w[k] - s.frames[0].camera.c2w[k]) < 1e-12);
+  BOOST_TEST((s.gt_views[0].rgb.data == s.frames[0].rgb.data));
+  BOOST_TEST(scene_summary(s).find("3 (1 static + 2 objects)") != std::string::npos);
+}
+
+BOOST_AUTO_TEST_CASE(dynamicnerf_single_mask_folder) {
+  TempDir tmp("dnerf");
+  const fs::path dir = copy_tiny_scene(tmp);
+  // DynamicNeRF: motion_masks/NNN.png = the moving region (objects 1 and 2 together).
+  const fs::path mm = dir / "motion_masks";
+  for (const auto& e : fs::directory_iterator(mm / "0")) {
+    const auto name = e.path().filename();
+    Image8 a = read_mask((mm / "1" / name).string()), b = read_mask((mm / "2" / name).string());
+    for (size_t i = 0; i < a.data.size(); ++i) a.data[i] = a.data[i] | b.data[i];
+    write_png((mm / name).string(), a);
+  }
+  for (const char* k : {"0", "1", "2"}) fs::remove_all(mm / k);
+  const Scene s = load_scene(dir.string());
+  BOOST_TEST(s.num_objects == 1);
+  const Scene ref = load_scene(cached_tiny_scene().string());
+  BOOST_TEST((s.frames[3].masks[0].data == ref.frames[3].masks[0].data));
+}
+
+BOOST_AUTO_TEST_CASE(missing_masks_need_static_only) {
+  TempDir tmp("nomask");
+  const fs::path dir = copy_tiny_scene(tmp);
+  fs::remove_all(dir / "motion_masks");
+  expect_error([&] { load_scene(dir.string()); }, {"motion_masks", "missing", "--static-only"});
+  LoadOptions opt;
+  opt.static_only = true;
+  const Scene s = load_scene(dir.string(), opt);
+  BOOST_TEST(s.num_objects == 0);
+  BOOST_TEST(s.frames[0].masks.size() == 1u);
+  BOOST_TEST(s.frames[0].masks[0].data[0] == 255);
+}
+
+BOOST_AUTO_TEST_CASE(llff_static_layout) {
+  TempDir tmp("llff");
+  const fs::path dir = copy_tiny_scene(tmp);
+  for (const char* d : {"motion_masks", "disp", "gt"}) fs::remove_all(dir / d);
+  BOOST_TEST(detect_format(dir.string()) == "llff");
+  const Scene s = load_scene(dir.string());
+  BOOST_TEST(s.format == "llff");
+  BOOST_TEST(s.num_objects == 0);
+  BOOST_TEST(s.bd_factor == 0.75);
+  BOOST_TEST(!s.has_time);
+}
+
+BOOST_AUTO_TEST_CASE(factor_downscales_images) {
+  LoadOptions opt;
+  opt.factor = 2;
+  const Scene s = load_scene(cached_tiny_scene().string(), opt);
+  BOOST_TEST(s.frames[0].camera.width == 32);
+  BOOST_TEST(s.frames[0].camera.fx == SynthWorld("tiny", 7).preset().focal / 2);
+  BOOST_TEST(s.frames[0].masks[1].width == 32);
+  BOOST_TEST(s.frames[0].disparity.width == 32);
+}
+
+BOOST_AUTO_TEST_CASE(blender_json_with_time) {
+  TempDir tmp("blender");
+  const fs::path dir = tmp.path();
+  fs::create_directories(dir / "train");
+  Image8 img(8, 6, 3, 100);
+  write_png((dir / "train" / "r_0.png").string(), img);
+  write_png((dir / "train" / "r_1.png").string(), img);
+  write_all(dir / "transforms_train.json",
+            R"({"camera_angle_x": 0.6911112, "frames": [
+  {"file_path": "./train/r_0", "time": 0.0, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]},
+  {"file_path": "./train/r_1", "time": 0.5, "transform_matrix": [[1,0,0,1],[0,1,0,0],[0,0,1,4],[0,0,0,1]]}]})");
+  BOOST_TEST(detect_format(dir.string()) == "blender");
+  const Scene s = load_scene(dir.string());
+  BOOST_TEST(s.frames.size() == 2u);
+  BOOST_TEST(s.has_time);
+  BOOST_TEST(s.frames[1].time == 0.0);
+  BOOST_TEST(s.frames[1].camera.position(0) == 1.0);
+  BOOST_TEST(std::abs(s.frames[0].camera.fx - 0.5 * 8 / std::tan(0.5 * 0.6911112)) < 1e-9);
+  BOOST_TEST(!s.ndc);
+}
+
+// ---- bad input: one test per case ----------------------------------------------------
+
+BOOST_AUTO_TEST_CASE(bad_missing_frame) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  fs::remove(dir / "images" / "005.png");
+  expect_error([&] { load_scene(dir.string()); },
+               {"images", "9 images", "poses_bounds.npy has 10 rows", "missing frames"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_extra_frame) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  fs::copy_file(dir / "images" / "000.png", dir / "images" / "010.png");
+  expect_error([&] { load_scene(dir.string()); }, {"images", "11 images", "extra frames"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_mask_count) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  fs::remove(dir / "motion_masks" / "1" / "003.png");
+  expect_error([&] { load_scene(dir.string()); },
+               {"motion_masks/1", "9 masks but 10 images", "mask count"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_npy_shape) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  write_npy_f64((dir / "poses_bounds.npy").string(), {10, 16}, std::vector<double>(160, 1.0));
+  expect_error([&] { load_scene(dir.string()); }, {"poses_bounds.npy", "shape (10, 16)", "(N, 17)"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_npy_dtype) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  write_all(dir / "poses_bounds.npy", npy_bytes("<i8", "(10, 17)", std::string(10 * 17 * 8, '\0')));
+  expect_error([&] { load_scene(dir.string()); }, {"poses_bounds.npy", "dtype '<i8'"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_disparity_shape) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  write_npy_f32((dir / "disp" / "002.npy").string(), {2, 3, 4}, std::vector<float>(24, 1.0f));
+  expect_error([&] { load_scene(dir.string()); }, {"disp/002.npy", "2-D"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_unreadable_png) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  write_all(dir / "images" / "002.png", "this is not an image");
+  expect_error([&] { load_scene(dir.string()); }, {"images/002.png", "not a PNG"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_truncated_png) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  const std::string bytes = read_all(dir / "images" / "004.png");
+  write_all(dir / "images" / "004.png", bytes.substr(0, bytes.size() / 2));
+  expect_error([&] { load_scene(dir.string()); }, {"images/004.png", "truncated PNG"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_corrupt_png_body) {
+  // Valid signature and IEND, garbage in between: the decoder must refuse it.
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  std::string bytes = read_all(dir / "motion_masks" / "2" / "001.png");
+  for (size_t i = 40; i + 12 < bytes.size(); ++i) bytes[i] = char(0x5a);
+  write_all(dir / "motion_masks" / "2" / "001.png", bytes);
+  expect_error([&] { load_scene(dir.string()); }, {"motion_masks/2/001.png", "cannot decode"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_nan_in_poses) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  poke_pose(dir, 3, 7, std::numeric_limits<double>::quiet_NaN());
+  expect_error([&] { load_scene(dir.string()); }, {"poses_bounds.npy", "row 3 column 7", "NaN"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_inf_in_poses) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  poke_pose(dir, 0, 3, std::numeric_limits<double>::infinity());
+  expect_error([&] { load_scene(dir.string()); }, {"poses_bounds.npy", "row 0 column 3", "Inf"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_near_bound) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  poke_pose(dir, 6, 15, 0.0);
+  expect_error([&] { load_scene(dir.string()); }, {"poses_bounds.npy", "row 6", "near bound 0 <= 0"});
+}
+
+BOOST_AUTO_TEST_CASE(bad_input_exit_code_from_cli) {
+  // The CLI turns the error into one line and exit code 2 (skipped if the CLI is not built).
+  const fs::path cli = fs::path(NOVA_BINARY_DIR) / "nova";
+  if (!fs::exists(cli)) {
+    BOOST_TEST_MESSAGE("nova CLI not built; skipped");
+    return;
+  }
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  poke_pose(dir, 1, 15, -1.0);
+  const std::string cmd = cli.string() + " scene --scene " + dir.string() + " 2>" +
+                          (tmp / "err.txt").string() + " >/dev/null";
+  const int status = std::system(cmd.c_str());
+  BOOST_TEST(WIFEXITED(status));
+  BOOST_TEST(WEXITSTATUS(status) == 2);
+  const std::string err = read_all(tmp / "err.txt");
+  BOOST_TEST(err.find("near bound -1 <= 0") != std::string::npos, err);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
