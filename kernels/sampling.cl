@@ -1,0 +1,95 @@
+// Ray generation (pinhole, OpenGL axes, optional LLFF NDC) and stratified samples along the
+// rays. Forward only: rays and samples are data for the NeRF MLPs, not trained.
+
+// cams [N, 16]: fx, fy, cx, cy, then the camera-to-world matrix, 3x4 row-major.
+// Pixel (i, j) looks along ((i - cx) / fx, -(j - cy) / fy, -1) in camera space (camera.hpp).
+// Outputs [N, R, 3]: origin and direction (world, or NDC when ndc != 0), and the unit world
+// direction (the view direction the reference feeds the colour head, taken before NDC).
+//
+// NDC as the reference's ndc_rays (forward-facing scenes, near plane `near`, principal point
+// at the image centre so that W / (2 f) = cx / fx): the origin moves onto the plane
+// z = -near, then
+//   o' = (-fx/cx ox/oz, -fy/cy oy/oz, 1 + 2 near / oz)
+//   d' = (-fx/cx (dx/dz - ox/oz), -fy/cy (dy/dz - oy/oz), -2 near / oz)
+__kernel void rays_generate(__global const float* pixels, __global const float* cams,
+                            __global float* origins, __global float* dirs,
+                            __global float* viewdirs, uint R, uint N, int ndc, float near) {
+  const uint r = get_global_id(0), n = get_global_id(1);
+  if (r >= R || n >= N) return;
+  __global const float* c = cams + n * 16;
+  __global const float* m = c + 4;
+  const float u = (pixels[r * 2] - c[2]) / c[0];
+  const float v = -(pixels[r * 2 + 1] - c[3]) / c[1];
+  float d[3], o[3];
+  for (int k = 0; k < 3; ++k) {
+    d[k] = m[k * 4] * u + m[k * 4 + 1] * v - m[k * 4 + 2];
+    o[k] = m[k * 4 + 3];
+  }
+  const float inv_norm = rsqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const size_t at = ((size_t)n * R + r) * 3;
+  for (int k = 0; k < 3; ++k) viewdirs[at + k] = d[k] * inv_norm;
+  if (ndc) {
+    const float t = -(near + o[2]) / d[2];
+    for (int k = 0; k < 3; ++k) o[k] += t * d[k];
+    const float ax = -c[0] / c[2], ay = -c[1] / c[3];
+    const float ox = o[0] / o[2], oy = o[1] / o[2];
+    const float nd[3] = {ax * (d[0] / d[2] - ox), ay * (d[1] / d[2] - oy), -2.0f * near / o[2]};
+    const float no[3] = {ax * ox, ay * oy, 1.0f + 2.0f * near / o[2]};
+    for (int k = 0; k < 3; ++k) {
+      d[k] = nd[k];
+      o[k] = no[k];
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    origins[at + k] = o[k];
+    dirs[at + k] = d[k];
+  }
+}
+
+// Depth of sample i of ray r: the reference's stratified scheme. Without jitter the samples
+// are linspace(near, far, S); with it, sample i is uniform (u = jitter[r, i]) between the
+// midpoints to its neighbours (the first and last keep their outer bound).
+inline float sample_depth(__global const float* jitter, int use_jitter, uint r, uint i, uint S,
+                          float near, float far) {
+  const float step = S > 1 ? (far - near) / (float)(S - 1) : 0.0f;
+  const float t = near + step * (float)i;
+  if (!use_jitter) return t;
+  const float lower = i > 0 ? t - 0.5f * step : t;
+  const float upper = i + 1 < S ? t + 0.5f * step : t;
+  return lower + (upper - lower) * jitter[(size_t)r * S + i];
+}
+
+// z [R, S] and the spacing delta [N, R, S] = (z_{i+1} - z_i) |d_n|, 1e10 |d_n| for the last
+// sample (as the reference's raw2outputs). One work-item per (sample, NeRF).
+__kernel void sample_spacing(__global const float* dirs, __global const float* jitter,
+                             __global float* z, __global float* delta, uint R, uint S, uint N,
+                             float near, float far, int use_jitter) {
+  const uint e = get_global_id(0), n = get_global_id(1);
+  if (e >= R * S || n >= N) return;
+  const uint r = e / S, i = e % S;
+  const float zi = sample_depth(jitter, use_jitter, r, i, S, near, far);
+  if (n == 0) z[e] = zi;
+  __global const float* d = dirs + ((size_t)n * R + r) * 3;
+  const float norm = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const float gap = i + 1 < S ? sample_depth(jitter, use_jitter, r, i + 1, S, near, far) - zi : 1e10f;
+  delta[(size_t)n * R * S + e] = gap * norm;
+}
+
+// Positions o + z d and the per-sample unit view direction, for NeRFs [first, first + count)
+// into a group's own tensors [count, R*S, 3] (the layout positional_encoding and a batched
+// MLP read). One work-item per (sample, NeRF of the group).
+__kernel void sample_points(__global const float* origins, __global const float* dirs,
+                            __global const float* viewdirs, __global const float* jitter,
+                            __global float* positions, __global float* sample_viewdirs, uint R,
+                            uint S, uint first, uint count, float near, float far,
+                            int use_jitter) {
+  const uint e = get_global_id(0), g = get_global_id(1);
+  if (e >= R * S || g >= count) return;
+  const uint r = e / S, i = e % S, n = first + g;
+  const float zi = sample_depth(jitter, use_jitter, r, i, S, near, far);
+  const size_t ray = ((size_t)n * R + r) * 3, out = ((size_t)g * R * S + e) * 3;
+  for (int k = 0; k < 3; ++k) {
+    positions[out + k] = origins[ray + k] + zi * dirs[ray + k];
+    sample_viewdirs[out + k] = viewdirs[ray + k];
+  }
+}

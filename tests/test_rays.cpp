@@ -1,0 +1,303 @@
+// generate_rays and stratified_samples against float64 host references written from the
+// conventions (camera.hpp, the reference's ndc_rays and stratified sampling), plus the
+// layout contract with positional_encoding / build_mlp / render_composite.
+#include <boost/test/unit_test.hpp>
+#include <array>
+#include <cmath>
+
+#include "harness.hpp"
+#include "nova/mlp.hpp"
+#include "nova/ops.hpp"
+#include "nova/rays.hpp"
+#include "nova/render.hpp"
+
+using namespace nova;
+using namespace nova::test;
+
+namespace {
+
+// A camera at `position` rotated by `angle` about y then `tilt` about x (c2w, OpenGL axes).
+Camera make_camera(double f, int w, int h, std::array<double, 3> position, double angle, double tilt) {
+  Camera c;
+  c.width = w;
+  c.height = h;
+  c.fx = c.fy = f;
+  c.cx = w / 2.0;
+  c.cy = h / 2.0;
+  const double ca = std::cos(angle), sa = std::sin(angle), ct = std::cos(tilt), st = std::sin(tilt);
+  // R = Ry(angle) * Rx(tilt)
+  const double R[3][3] = {{ca, sa * st, sa * ct}, {0, ct, -st}, {-sa, ca * st, ca * ct}};
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) c.c2w[r * 4 + k] = static_cast<float>(R[r][k]);
+    c.c2w[r * 4 + 3] = static_cast<float>(position[r]);
+  }
+  c.fx = c.fy = static_cast<float>(f);
+  return c;
+}
+
+struct RefRay {
+  std::array<double, 3> o, d, view;
+};
+
+// Straight from camera.hpp and the reference's ndc_rays (near plane `near`).
+RefRay ref_ray(const Camera& c, double i, double j, bool ndc, double near) {
+  const double cam[3] = {(i - c.cx) / c.fx, -(j - c.cy) / c.fy, -1.0};
+  RefRay r;
+  for (int k = 0; k < 3; ++k) {
+    r.d[k] = c.rotation(k, 0) * cam[0] + c.rotation(k, 1) * cam[1] + c.rotation(k, 2) * cam[2];
+    r.o[k] = c.position(k);
+  }
+  const double n = std::sqrt(r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2]);
+  for (int k = 0; k < 3; ++k) r.view[k] = r.d[k] / n;
+  if (ndc) {
+    const double W = 2 * c.cx, H = 2 * c.cy, focal = c.fx;
+    const double t = -(near + r.o[2]) / r.d[2];
+    std::array<double, 3> o;
+    for (int k = 0; k < 3; ++k) o[k] = r.o[k] + t * r.d[k];
+    const auto& d = r.d;
+    r.o = {-1 / (W / (2 * focal)) * o[0] / o[2], -1 / (H / (2 * focal)) * o[1] / o[2], 1 + 2 * near / o[2]};
+    r.d = {-1 / (W / (2 * focal)) * (d[0] / d[2] - o[0] / o[2]),
+           -1 / (H / (2 * focal)) * (d[1] / d[2] - o[1] / o[2]), -2 * near / o[2]};
+  }
+  return r;
+}
+
+struct RayRun {
+  std::vector<float> o, d, view;
+};
+
+RayRun run_rays(const std::vector<Camera>& cams, const std::vector<float>& pixels, bool ndc) {
+  Graph g;
+  const size_t R = pixels.size() / 2, N = cams.size();
+  Tensor p = g.input("pixels", Shape{R, 2}), c = g.input("cameras", Shape{N, 16});
+  RayOptions o;
+  o.ndc = ndc;
+  Rays rays = generate_rays(p, c, o);
+  for (Tensor t : {rays.origins, rays.directions, rays.viewdirs}) g.keep(t);
+  Executor ex(runtime(), g);
+  ex.set(p, pixels);
+  ex.set(c, camera_rows(cams));
+  ex.forward();
+  return {ex.get(rays.origins), ex.get(rays.directions), ex.get(rays.viewdirs)};
+}
+
+std::vector<float> random_pixels(size_t R, int w, int h, unsigned seed) {
+  auto u = random_floats(R * 2, 0, 1, seed);
+  for (size_t r = 0; r < R; ++r) {
+    u[2 * r] = std::floor(u[2 * r] * w);
+    u[2 * r + 1] = std::floor(u[2 * r + 1] * h);
+  }
+  return u;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(rays)
+
+// Ray tolerance: float32 rotation of a direction with components up to |(i - cx) / f| ~ 1 and
+// translations of O(1): a few ulps, so atol 1e-6 with rtol 1e-6 for metric rays.
+BOOST_AUTO_TEST_CASE(pinhole_rays_per_nerf_camera) {
+  const std::vector<Camera> cams = {make_camera(400, 480, 270, {0.1, -0.2, 0.3}, 0.0, 0.0),
+                                    make_camera(400, 480, 270, {0.1, -0.2, 0.3}, 0.3, -0.2),
+                                    make_camera(350, 480, 270, {1.0, 0.5, -2.0}, -0.35, 0.1)};
+  const auto pixels = random_pixels(25, 480, 270, 3);
+  const RayRun got = run_rays(cams, pixels, false);
+  std::vector<double> o, d, v;
+  for (const Camera& c : cams)
+    for (size_t r = 0; r < 25; ++r) {
+      const RefRay ref = ref_ray(c, pixels[2 * r], pixels[2 * r + 1], false, 1.0);
+      o.insert(o.end(), ref.o.begin(), ref.o.end());
+      d.insert(d.end(), ref.d.begin(), ref.d.end());
+      v.insert(v.end(), ref.view.begin(), ref.view.end());
+    }
+  expect_close(got.o, o, 1e-6, 1e-6, "origins");
+  expect_close(got.d, d, 1e-6, 1e-6, "directions");
+  expect_close(got.view, v, 1e-6, 1e-6, "viewdirs");
+  // The principal point of the unrotated camera looks straight down -z.
+  const RayRun centre = run_rays({cams[0]}, {240.0f, 135.0f}, false);
+  BOOST_TEST(centre.d == (std::vector<float>{0, 0, -1}), boost::test_tools::per_element());
+}
+
+// NDC tolerance: the mapping divides by o_z and d_z (|d_z| = 1 here, o_z = -1 after the shift
+// to the near plane), so float32 errors stay at a few ulps of O(1) values: atol 1e-5 (pixels
+// far from the centre give |d'| up to 2).
+BOOST_AUTO_TEST_CASE(ndc_rays_match_reference_ndc_rays) {
+  // Forward-facing: cameras near the origin looking down -z, as LLFF scenes after recentring.
+  const std::vector<Camera> cams = {make_camera(420, 480, 270, {0.0, 0.0, 0.0}, 0.0, 0.0),
+                                    make_camera(420, 480, 270, {0.05, -0.02, 0.1}, 0.1, 0.05)};
+  const auto pixels = random_pixels(25, 480, 270, 4);
+  const RayRun got = run_rays(cams, pixels, true);
+  std::vector<double> o, d;
+  for (const Camera& c : cams)
+    for (size_t r = 0; r < 25; ++r) {
+      const RefRay ref = ref_ray(c, pixels[2 * r], pixels[2 * r + 1], true, 1.0);
+      o.insert(o.end(), ref.o.begin(), ref.o.end());
+      d.insert(d.end(), ref.d.begin(), ref.d.end());
+    }
+  expect_close(got.o, o, 1e-5, 1e-5, "ndc origins");
+  expect_close(got.d, d, 1e-5, 1e-5, "ndc directions");
+  // Every NDC origin lies on the near plane, z' = -1, and o + d reaches z' = +1 (infinity).
+  for (size_t r = 0; r < 50; ++r) {
+    BOOST_TEST(std::fabs(got.o[r * 3 + 2] + 1.0f) < 1e-5f);
+    BOOST_TEST(std::fabs(got.o[r * 3 + 2] + got.d[r * 3 + 2] - 1.0f) < 1e-5f);
+  }
+}
+
+namespace {
+
+struct SampleRun {
+  std::vector<float> z, delta;
+  std::vector<std::vector<float>> positions, viewdirs;
+  std::vector<Shape> shapes;
+  std::vector<float> o, d, view;
+};
+
+SampleRun run_samples(const std::vector<Camera>& cams, const std::vector<float>& pixels,
+                      const std::vector<float>& jitter, const SampleOptions& so, bool ndc) {
+  Graph g;
+  const size_t R = pixels.size() / 2, N = cams.size(), S = so.samples;
+  Tensor p = g.input("pixels", Shape{R, 2}), c = g.input("cameras", Shape{N, 16});
+  Tensor j = jitter.empty() ? Tensor{} : g.input("jitter", Shape{R, S});
+  RayOptions ro;
+  ro.ndc = ndc;
+  Rays rays = generate_rays(p, c, ro);
+  Samples s = stratified_samples(rays, j, so);
+  for (Tensor t : {rays.origins, rays.directions, rays.viewdirs, s.z, s.delta}) g.keep(t);
+  for (size_t k = 0; k < s.positions.size(); ++k) {
+    g.keep(s.positions[k]);
+    g.keep(s.viewdirs[k]);
+  }
+  Executor ex(runtime(), g);
+  ex.set(p, pixels);
+  ex.set(c, camera_rows(cams));
+  if (j.valid()) ex.set(j, jitter);
+  ex.forward();
+  SampleRun out{ex.get(s.z), ex.get(s.delta), {}, {}, {}, ex.get(rays.origins),
+                ex.get(rays.directions), ex.get(rays.viewdirs)};
+  for (size_t k = 0; k < s.positions.size(); ++k) {
+    out.positions.push_back(ex.get(s.positions[k]));
+    out.viewdirs.push_back(ex.get(s.viewdirs[k]));
+    out.shapes.push_back(s.positions[k].shape());
+  }
+  return out;
+}
+
+// The reference's stratified depths: linspace(near, far, S); with jitter u, uniform between
+// the midpoints to the neighbours.
+std::vector<double> ref_depths(size_t R, size_t S, double near, double far, const std::vector<float>& u) {
+  std::vector<double> z(R * S);
+  for (size_t r = 0; r < R; ++r) {
+    std::vector<double> t(S);
+    for (size_t i = 0; i < S; ++i) t[i] = near * (1 - double(i) / (S - 1)) + far * double(i) / (S - 1);
+    for (size_t i = 0; i < S; ++i) {
+      if (u.empty()) {
+        z[r * S + i] = t[i];
+        continue;
+      }
+      const double lower = i > 0 ? 0.5 * (t[i - 1] + t[i]) : t[i];
+      const double upper = i + 1 < S ? 0.5 * (t[i] + t[i + 1]) : t[i];
+      z[r * S + i] = lower + (upper - lower) * u[r * S + i];
+    }
+  }
+  return z;
+}
+
+}  // namespace
+
+// Sample tolerance: depths are near + i * step in float32 (atol 1e-6 * far); positions add
+// z d to o (atol 1e-5 * scale with metric scales up to 6); spacings are differences of
+// neighbouring depths, whose absolute error 1e-6 * far is relative to a gap of
+// (far - near) / S, hence rtol 1e-4 there.
+BOOST_AUTO_TEST_CASE(stratified_samples_layout_and_values) {
+  const std::vector<Camera> cams = {make_camera(400, 64, 48, {0, 0, 4}, 0.0, 0.0),
+                                    make_camera(400, 64, 48, {0, 0, 4}, 0.2, 0.0),
+                                    make_camera(400, 64, 48, {0, 0, 4}, -0.2, 0.1)};
+  const size_t R = 6, S = 16, N = 3;
+  const auto pixels = random_pixels(R, 64, 48, 5);
+  for (bool jittered : {false, true}) {
+    SampleOptions so;
+    so.samples = S;
+    so.near = 2.0f;
+    so.far = 6.0f;
+    so.groups = {1, 2};
+    const auto jitter = jittered ? random_floats(R * S, 0, 1, 6) : std::vector<float>{};
+    const SampleRun s = run_samples(cams, pixels, jitter, so, false);
+    BOOST_TEST(s.shapes[0].str() == "[96, 3]");
+    BOOST_TEST(s.shapes[1].str() == "[2, 96, 3]");
+    const auto z = ref_depths(R, S, 2.0, 6.0, jitter);
+    expect_close(s.z, z, 6e-6, 1e-6, "z");
+    std::vector<double> delta, pos0, pos1, view1;
+    for (size_t n = 0; n < N; ++n)
+      for (size_t r = 0; r < R; ++r) {
+        const float* d = &s.d[(n * R + r) * 3];
+        const double norm = std::sqrt(double(d[0]) * d[0] + double(d[1]) * d[1] + double(d[2]) * d[2]);
+        for (size_t i = 0; i < S; ++i) {
+          const double zi = z[r * S + i];
+          delta.push_back((i + 1 < S ? z[r * S + i + 1] - zi : 1e10) * norm);
+          for (int k = 0; k < 3; ++k) {
+            const double p = s.o[(n * R + r) * 3 + k] + zi * d[k];
+            (n == 0 ? pos0 : pos1).push_back(p);
+            if (n > 0) view1.push_back(s.view[(n * R + r) * 3 + k]);
+          }
+        }
+      }
+    expect_close(s.delta, delta, 1e-6, 1e-4, "delta");
+    expect_close(s.positions[0], pos0, 6e-5, 1e-6, "positions of group 0");
+    expect_close(s.positions[1], pos1, 6e-5, 1e-6, "positions of group 1");
+    expect_close(s.viewdirs[1], view1, 1e-7, 0, "viewdirs of group 1 (copied)");
+    // Strata: every depth inside its own stratum, so depths increase along the ray.
+    for (size_t r = 0; r < R; ++r)
+      for (size_t i = 1; i < S; ++i) BOOST_TEST(s.z[r * S + i] >= s.z[r * S + i - 1]);
+  }
+}
+
+// The chain the trainer builds: NDC rays -> samples -> positional_encoding -> MLPs (static
+// and a batch of 2 objects) -> stack -> render_composite. Checks that the shapes connect
+// without copies or reshapes; runs the encoding and renderer on small data.
+BOOST_AUTO_TEST_CASE(samples_plug_into_encoding_mlp_and_renderer) {
+  Graph g;
+  const size_t R = 8, S = 8;
+  Tensor p = g.input("pixels", Shape{R, 2}), c = g.input("cameras", Shape{3, 16});
+  Tensor j = g.input("jitter", Shape{R, S});
+  RayOptions ro;
+  ro.ndc = true;
+  Rays rays = generate_rays(p, c, ro);
+  SampleOptions so;
+  so.samples = S;
+  so.groups = {1, 2};
+  Samples s = stratified_samples(rays, j, so);
+  Tensor enc_static = positional_encoding(s.positions[0], 10);
+  Tensor enc_objects = positional_encoding(s.positions[1], 10);
+  BOOST_TEST(enc_static.shape().str() == "[64, 63]");
+  BOOST_TEST(enc_objects.shape().str() == "[2, 64, 63]");
+  MlpConfig one;
+  one.depth = 2;
+  one.width = 16;
+  one.skip = -1;
+  one.outputs = kRawChannels;
+  MlpConfig two = one;
+  two.networks = 2;
+  Mlp mlp_static = build_mlp(enc_static, one, "static");
+  Mlp mlp_objects = build_mlp(enc_objects, two, "objects");
+  BOOST_TEST(mlp_static.output.shape().str() == "[64, 5]");
+  BOOST_TEST(mlp_objects.output.shape().str() == "[2, 64, 5]");
+  RenderOutputs out = render_composite(stack({mlp_static.output, mlp_objects.output}), s.delta, s.z);
+  BOOST_TEST(out.mask.shape().str() == "[3, 8]");
+}
+
+BOOST_AUTO_TEST_CASE(rejects_bad_inputs) {
+  Graph g;
+  Tensor p = g.input("pixels", Shape{4, 3}), c = g.input("cameras", Shape{2, 16});
+  BOOST_CHECK_THROW(generate_rays(p, c), Error);
+  Tensor p2 = g.input("pixels2", Shape{4, 2});
+  Rays rays = generate_rays(p2, c);
+  SampleOptions so;
+  so.samples = 8;
+  so.groups = {1, 2};  // 3 NeRFs for 2 cameras
+  BOOST_CHECK_THROW(stratified_samples(rays, Tensor{}, so), Error);
+  so.groups = {};
+  Tensor bad_jitter = g.input("jitter", Shape{4, 7});
+  BOOST_CHECK_THROW(stratified_samples(rays, bad_jitter, so), Error);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
