@@ -44,12 +44,6 @@ std::vector<float> run_forward(const test::BuildFn& build,
   return ex.get(op.output);
 }
 
-// Values kept at least `gap` away from 0, so ReLU's kink stays out of the difference stencil.
-std::vector<float> away_from_zero(std::vector<float> v, float gap) {
-  for (float& x : v) x = x >= 0 ? x + gap : x - gap;
-  return v;
-}
-
 const Activation kActivations[] = {Activation::Identity, Activation::ReLU, Activation::Sigmoid,
                                    Activation::Softplus};
 

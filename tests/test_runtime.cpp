@@ -74,6 +74,17 @@ BOOST_AUTO_TEST_CASE(cli_reports_bad_selector_with_exit_code_2) {
   BOOST_TEST(code_ok == 0, err_ok);
 }
 
+BOOST_AUTO_TEST_CASE(cli_rejects_bad_options_with_exit_code_2) {
+  if (!std::filesystem::exists(NOVA_BINARY_DIR "/nova")) return;
+  for (const char* args : {"train-mlp --steps 0", "train-mlp --bogus 1", "train-mlp --lr abc",
+                           "no-such-command"}) {
+    const auto [code, err] = run_cli(args);
+    BOOST_TEST(code == 2, args << ": " << err);
+    BOOST_TEST(!err.empty(), args);
+  }
+  BOOST_TEST(run_cli("train-mlp --help").first == 0);
+}
+
 BOOST_AUTO_TEST_CASE(cli_without_platform_says_what_to_install) {
   if (!std::filesystem::exists(NOVA_BINARY_DIR "/nova")) return;
   // An empty vendor directory leaves the ICD loader with no platform at all.
