@@ -11,6 +11,7 @@ namespace nova::bench {
 using Args = std::vector<std::string>;
 
 int mlp(const Args& args);
+int render(const Args& args);
 
 struct Benchmark {
   const char* name;

@@ -12,6 +12,7 @@ namespace nova::bench {
 const std::vector<Benchmark>& benchmarks() {
   static const std::vector<Benchmark> all = {
       {"mlp", "reference MLP forward / forward+backward, GEMMs beside a host BLAS", mlp},
+      {"render", "compositing op forward / backward for 1 + K NeRFs beside a host loop", render},
   };
   return all;
 }
