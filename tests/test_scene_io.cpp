@@ -146,6 +146,28 @@ BOOST_AUTO_TEST_CASE(blender_json_with_time) {
   BOOST_TEST(!s.ndc);
 }
 
+BOOST_AUTO_TEST_CASE(shared_data_if_available) {
+  // Extra checks on the real scenes in ../shared/data, never required.
+  const fs::path data = fs::path(NOVA_SOURCE_DIR) / ".." / "shared" / "data";
+  if (fs::exists(data / "llff_fern" / "poses_bounds.npy")) {
+    const Scene s = load_scene((data / "llff_fern").string());
+    BOOST_TEST(s.format == "llff");
+    BOOST_TEST(s.frames.size() == 20u);
+    BOOST_TEST(s.frames[0].camera.width == 504);
+    BOOST_TEST(std::abs(s.frames[0].camera.fx - 3260.526 / 8) < 0.01);
+  }
+  if (fs::exists(data / "nvidia_balloon1" / "poses_bounds.npy")) {
+    LoadOptions opt;
+    opt.factor = 2;
+    opt.static_only = !fs::exists(data / "nvidia_balloon1" / "motion_masks");
+    const Scene s = load_scene((data / "nvidia_balloon1").string(), opt);
+    BOOST_TEST(s.frames.size() == 12u);
+    BOOST_TEST(s.frames[0].camera.width == 480);
+    BOOST_TEST(s.frames[0].camera.height == 270);
+    BOOST_TEST(!s.frames[0].disparity.empty());
+  }
+}
+
 // ---- bad input: one test per case ----------------------------------------------------
 
 BOOST_AUTO_TEST_CASE(bad_missing_frame) {

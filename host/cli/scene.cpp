@@ -12,11 +12,11 @@ int scene(const Args& args) {
   po::options_description desc("nova scene options");
   desc.add_options()("help,h", "show this help")(
       "scene", po::value<std::string>()->required(), "scene folder")(
-      "format", po::value<std::string>()->default_value("auto"), "auto | nova | llff | blender")(
+      "format", po::value<std::string>()->default_value("auto"), "auto | nova | llff | blender | npz")(
       "factor", po::value<int>()->default_value(0),
       "image downscale factor (0: images/ if present, else the one images_F/)")(
       "static-only", po::bool_switch(), "load a scene without motion masks as static-only (K = 0)")(
-      "split", po::value<std::string>()->default_value("train"), "Blender: transforms_<split>.json");
+      "split", po::value<std::string>()->default_value("train"), "Blender: transforms_<split>.json; npz: train, val or test");
   po::variables_map vm;
   if (!parse(args, desc, vm, "usage: nova scene --scene DIR [--factor F] [--static-only]"))
     return 0;

@@ -14,6 +14,7 @@ namespace fs = data::fs;
 
 std::string detect_format(const std::string& dir_s, const LoadOptions& opt) {
   const fs::path dir(dir_s);
+  if (fs::is_regular_file(dir) && dir.extension() == ".npz") return "npz";
   if (!fs::is_directory(dir)) throw Error(dir_s + ": not a folder");
   if (fs::exists(dir / "poses_bounds.npy")) {
     if (fs::exists(dir / "motion_masks") || fs::exists(dir / "disp") || fs::exists(dir / "gt"))
@@ -21,8 +22,9 @@ std::string detect_format(const std::string& dir_s, const LoadOptions& opt) {
     return "llff";
   }
   if (fs::exists(dir / ("transforms_" + opt.split + ".json"))) return "blender";
-  throw Error(dir_s + ": unknown scene layout (expected poses_bounds.npy, or transforms_" +
-              opt.split + ".json)");
+  if (data::list_files(dir, {".npz"}).size() == 1) return "npz";
+  throw Error(dir_s + ": unknown scene layout (expected poses_bounds.npy, transforms_" +
+              opt.split + ".json or one .npz)");
 }
 
 Scene load_scene(const std::string& dir, const LoadOptions& opt) {
@@ -30,7 +32,8 @@ Scene load_scene(const std::string& dir, const LoadOptions& opt) {
   if (f == "nova" || f == "dynamicnerf") return load_nova_scene(dir, opt);
   if (f == "llff") return load_llff_scene(dir, opt);
   if (f == "blender" || f == "dnerf") return load_blender_scene(dir, opt);
-  throw Error("unknown scene format '" + opt.format + "' (use auto, nova, llff or blender)");
+  if (f == "npz") return load_dnerf_npz_scene(dir, opt);
+  throw Error("unknown scene format '" + opt.format + "' (use auto, nova, llff, blender or npz)");
 }
 
 std::string scene_summary(const Scene& s) {

@@ -13,6 +13,8 @@
 //   bd_factor 0.75, recentred, NDC.
 // - "blender": transforms_<split>.json (Blender / D-NeRF; `time` per frame where present),
 //   RGBA composited on white, near 2, far 6, no NDC, K = 0.
+// - "npz": a folder holding one D-NeRF-style .npz (or the .npz itself); see
+//   load_dnerf_npz_scene.
 #include <string>
 
 #include "nova/scene.hpp"
@@ -20,7 +22,7 @@
 namespace nova {
 
 struct LoadOptions {
-  std::string format = "auto";  // auto | nova | llff | blender
+  std::string format = "auto";  // auto | nova | llff | blender | npz
   int factor = 0;               // image downscale factor; 0 = auto (images/ if present, else
                                 // the one images_F/ folder; Blender: 1)
   bool static_only = false;     // load a NOVA scene without masks as static-only (K = 0)
@@ -37,6 +39,8 @@ Scene load_scene(const std::string& dir, const LoadOptions& opt = {});
 Scene load_nova_scene(const std::string& dir, const LoadOptions& opt = {});
 Scene load_llff_scene(const std::string& dir, const LoadOptions& opt = {});
 Scene load_blender_scene(const std::string& dir, const LoadOptions& opt = {});
+// The "tiny D-NeRF" .npz (images, poses, times, focal; splits found from time resets).
+Scene load_dnerf_npz_scene(const std::string& dir_or_file, const LoadOptions& opt = {});
 
 // A few lines describing the scene: sizes, cameras, masks, bounds, ground truth, notes.
 std::string scene_summary(const Scene& scene);
