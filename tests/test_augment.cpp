@@ -47,7 +47,7 @@ BOOST_AUTO_TEST_CASE(homography_maps_rays_exactly) {
     const Camera rc = rotate_camera(cam, rot);
     for (int k = 0; k < 3; ++k) BOOST_TEST(rc.position(k) == cam.position(k));
     const auto h = rotation_homography(cam, rot);
-    for (const auto [i, j] : {std::pair{0.0, 0.0}, {63.0, 47.0}, {10.5, 30.25}, {32.0, 24.0}}) {
+    for (const auto& [i, j] : {std::pair{0.0, 0.0}, {63.0, 47.0}, {10.5, 30.25}, {32.0, 24.0}}) {
       const double z = h[6] * i + h[7] * j + h[8];
       BOOST_TEST(z > 0);
       const double x = (h[0] * i + h[1] * j + h[2]) / z, y = (h[3] * i + h[4] * j + h[5]) / z;
@@ -102,7 +102,7 @@ BOOST_AUTO_TEST_CASE(warp_matches_fresh_render) {
         const int o = owner(truth, x, y);
         bool interior = o >= 0;
         const double d0 = src.depth.data[size_t(y0) * cam.width + x0];
-        for (const auto [dx, dy] : {std::pair{0, 0}, {1, 0}, {0, 1}, {1, 1}}) {
+        for (const auto& [dx, dy] : {std::pair{0, 0}, {1, 0}, {0, 1}, {1, 1}}) {
           const double d = src.depth.data[size_t(y0 + dy) * cam.width + x0 + dx];
           interior = interior && owner(src, x0 + dx, y0 + dy) == o && std::abs(d - d0) < 0.03 * d0;
         }
