@@ -17,12 +17,7 @@ class RenderCompositeOp final : public Op {
 
   std::string type() const override { return "render_composite"; }
 
-  std::string options() const {
-    std::ostringstream s;
-    s << "-DNERFS=" << nerfs_ << " -DRGB_SIGMOID=" << o_.rgb_sigmoid
-      << " -DBLEND_SIGMOID=" << o_.blend_sigmoid << " -DHARD_BLEND=" << o_.hard_blend;
-    return s.str();
-  }
+  std::string options() const { return render_program_options(nerfs_, o_); }
 
   void forward(ExecContext& ctx) override {
     ctx.launch("render", "render_forward", options())
@@ -78,6 +73,13 @@ class RenderCompositeOp final : public Op {
 }
 
 }  // namespace
+
+std::string render_program_options(size_t nerfs, const RenderOptions& o) {
+  std::ostringstream s;
+  s << "-DNERFS=" << nerfs << " -DRGB_SIGMOID=" << o.rgb_sigmoid
+    << " -DBLEND_SIGMOID=" << o.blend_sigmoid << " -DHARD_BLEND=" << o.hard_blend;
+  return s.str();
+}
 
 RenderOutputs render_composite(Tensor raw, Tensor delta, Tensor z, Tensor noise,
                                const RenderOptions& options) {

@@ -5,6 +5,7 @@
 //
 // The trainer chains: samples (rays.hpp) -> positional_encoding -> MLP -> stack (when the
 // static and object NeRFs are separate MLPs) -> render_composite -> losses (losses.hpp).
+#include <string>
 #include <vector>
 
 #include "nova/graph.hpp"
@@ -44,6 +45,10 @@ struct RenderOutputs {
 // delta, z and noise are data: they must not require a gradient.
 RenderOutputs render_composite(Tensor raw, Tensor delta, Tensor z, Tensor noise = {},
                                const RenderOptions& options = {});
+
+// The build options of kernels/render.cl for `nerfs` NeRFs: one program per NeRF count and
+// option set. Exposed so that a warm-up can compile exactly what the op will use.
+std::string render_program_options(size_t nerfs, const RenderOptions& options = {});
 
 // Stacks tensors along a new (or existing) leading NeRF dimension: parts [M, C] or
 // [B_j, M, C] give [sum B_j, M, C]. Lets a static MLP [M, C] and a batched object MLP
