@@ -217,8 +217,34 @@ void Executor::run_node(int n, Pass pass) {
   if (options_.check_finite) check_finite(n, pass);
 }
 
+void Executor::run_pass(const std::vector<int>& nodes, Pass pass) {
+  // With profiling, a marker after every op: op time = end of its marker - end of the last.
+  const bool timed = options_.profile && rt_.profiling();
+  std::vector<cl_event> marks;
+  const auto mark = [&] {
+    cl_event e;
+    cl_check(clEnqueueMarkerWithWaitList(rt_.queue(), 0, nullptr, &e), "clEnqueueMarker");
+    marks.push_back(e);
+  };
+  if (timed) mark();
+  for (int n : nodes) {
+    run_node(n, pass);
+    if (timed) mark();
+  }
+  if (!timed) return;
+  rt_.finish();
+  for (size_t j = 0; j < nodes.size(); ++j) {
+    const std::string type =
+        graph_.node(nodes[j]).type() + (pass == Pass::Backward ? " (backward)" : "");
+    auto& t = timings_[type];
+    t.type = type;
+    t.calls++;
+    t.ms += (event_end(marks[j + 1]) - event_end(marks[j])) * 1e-6;
+  }
+  for (cl_event e : marks) clReleaseEvent(e);
+}
+
 void Executor::forward() {
-  const int nn = static_cast<int>(graph_.node_count());
   if (options_.check_finite)
     for (size_t t = 0; t < graph_.tensor_count(); ++t)
       if (graph_.tensor(t).role == TensorRole::Input) {
@@ -228,28 +254,9 @@ void Executor::forward() {
             throw Error("input '" + graph_.tensor(t).name + "' holds a non-finite value at " +
                         std::to_string(i));
       }
-  const bool timed = options_.profile && rt_.profiling();
-  std::vector<cl_event> marks;
-  const auto mark = [&] {
-    cl_event e;
-    cl_check(clEnqueueMarkerWithWaitList(rt_.queue(), 0, nullptr, &e), "clEnqueueMarker");
-    marks.push_back(e);
-  };
-  if (timed) mark();
-  for (int n = 0; n < nn; ++n) {
-    run_node(n, Pass::Forward);
-    if (timed) mark();
-  }
-  if (timed) {
-    rt_.finish();
-    for (int n = 0; n < nn; ++n) {
-      auto& t = timings_[graph_.node(n).type()];
-      t.type = graph_.node(n).type();
-      t.calls++;
-      t.ms += (event_end(marks[n + 1]) - event_end(marks[n])) * 1e-6;
-    }
-    for (cl_event e : marks) clReleaseEvent(e);
-  }
+  std::vector<int> nodes(graph_.node_count());
+  for (size_t n = 0; n < nodes.size(); ++n) nodes[n] = static_cast<int>(n);
+  run_pass(nodes, Pass::Forward);
   forward_done_ = true;
 }
 
@@ -261,29 +268,7 @@ void Executor::backward() {
   if (!has_grad_[loss.id]) return;  // the loss depends on no parameter
   const float one = 1.0f;
   rt_.upload(grads_[loss.id].get(), &one, sizeof(one));
-  const bool timed = options_.profile && rt_.profiling();
-  std::vector<cl_event> marks;
-  const auto mark = [&] {
-    cl_event e;
-    cl_check(clEnqueueMarkerWithWaitList(rt_.queue(), 0, nullptr, &e), "clEnqueueMarker");
-    marks.push_back(e);
-  };
-  if (timed) mark();
-  for (int n : backward_nodes_) {
-    run_node(n, Pass::Backward);
-    if (timed) mark();
-  }
-  if (timed) {
-    rt_.finish();
-    for (size_t j = 0; j < backward_nodes_.size(); ++j) {
-      const std::string type = graph_.node(backward_nodes_[j]).type() + " (backward)";
-      auto& t = timings_[type];
-      t.type = type;
-      t.calls++;
-      t.ms += (event_end(marks[j + 1]) - event_end(marks[j])) * 1e-6;
-    }
-    for (cl_event e : marks) clReleaseEvent(e);
-  }
+  run_pass(backward_nodes_, Pass::Backward);
 }
 
 void Executor::check_finite(int n, Pass pass) {

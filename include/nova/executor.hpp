@@ -101,6 +101,7 @@ class Executor {
   void allocate();
   void init_parameters(unsigned seed);
   void run_node(int node, Pass pass);
+  void run_pass(const std::vector<int>& nodes, Pass pass);
   void check_finite(int node, Pass pass);
 
   Runtime& rt_;
