@@ -2,6 +2,7 @@
 // input before layer 5); its backward splits the gradient into the parts.
 #include "nova/executor.hpp"
 #include "nova/ops.hpp"
+#include "concat_op.hpp"
 #include "op_util.hpp"
 
 namespace nova {
@@ -9,10 +10,11 @@ namespace {
 
 class ConcatOp final : public Op {
  public:
-  ConcatOp(size_t rows, std::vector<size_t> widths) : rows_(rows), widths_(std::move(widths)) {
+  ConcatOp(size_t rows, std::vector<size_t> widths, std::string type)
+      : rows_(rows), widths_(std::move(widths)), type_(std::move(type)) {
     for (size_t w : widths_) total_ += w;
   }
-  std::string type() const override { return "concat"; }
+  std::string type() const override { return type_; }
 
   void forward(ExecContext& ctx) override {
     size_t offset = 0;
@@ -46,10 +48,15 @@ class ConcatOp final : public Op {
  private:
   size_t rows_;
   std::vector<size_t> widths_;
+  std::string type_;
   size_t total_ = 0;
 };
 
 }  // namespace
+
+std::unique_ptr<Op> make_column_concat(size_t rows, std::vector<size_t> widths, std::string type) {
+  return std::make_unique<ConcatOp>(rows, std::move(widths), std::move(type));
+}
 
 Tensor concat(const std::vector<Tensor>& parts) {
   if (parts.empty()) throw Error("concat of nothing", kExitInternal);
@@ -68,7 +75,7 @@ Tensor concat(const std::vector<Tensor>& parts) {
   for (size_t w : widths) out.dims.back() += w;
   Graph& g = *parts[0].graph;
   Tensor y = g.activation(name + ".cat", out);
-  g.add(std::make_unique<ConcatOp>(first.rows(), widths), parts, {y});
+  g.add(make_column_concat(first.rows(), widths, "concat"), parts, {y});
   return y;
 }
 
