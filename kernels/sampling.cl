@@ -93,3 +93,35 @@ __kernel void sample_points(__global const float* origins, __global const float*
     sample_viewdirs[out + k] = viewdirs[ray + k];
   }
 }
+
+// Sample positions of a render ray seen by placed object instances (composition): each
+// instance b carries the inverse of its placement, a world-to-object 3x4 map xf[b], so the
+// object NeRF is queried where the moved object would be. In NDC the map is taken in world
+// coordinates: p = ndc^-1(q), p' = xf[b] p, q' = ndc(p'), with ndc(p) = (ax px/pz, ay py/pz,
+// 1 + 2 near / pz) as rays_generate. One work-item per (sample, instance).
+__kernel void instance_points(__global const float* positions, __global const float* xf,
+                              __global float* out, uint M, uint B, int ndc, float ax, float ay,
+                              float near) {
+  const uint e = get_global_id(0), b = get_global_id(1);
+  if (e >= M || b >= B) return;
+  __global const float* q = positions + (size_t)e * 3;
+  float p[3] = {q[0], q[1], q[2]};
+  if (ndc) {
+    // q_z = 1 is the far end of NDC (world z = -inf): keep it finite, behind every object.
+    const float pz = 2.0f * near / fmin(p[2] - 1.0f, -1e-6f);
+    p[0] = q[0] * pz / ax;
+    p[1] = q[1] * pz / ay;
+    p[2] = pz;
+  }
+  __global const float* m = xf + (size_t)b * 12;
+  float r[3];
+  for (int k = 0; k < 3; ++k) r[k] = m[k * 4] * p[0] + m[k * 4 + 1] * p[1] + m[k * 4 + 2] * p[2] + m[k * 4 + 3];
+  if (ndc) {
+    const float z = fmin(r[2], -1e-6f);  // points behind the NDC origin plane stay behind
+    r[0] = ax * r[0] / z;
+    r[1] = ay * r[1] / z;
+    r[2] = 1.0f + 2.0f * near / z;
+  }
+  __global float* o = out + ((size_t)b * M + e) * 3;
+  for (int k = 0; k < 3; ++k) o[k] = r[k];
+}

@@ -71,6 +71,25 @@ class StratifiedSamplesOp final : public Op {
   bool jitter_;
 };
 
+class InstancePointsOp final : public Op {
+ public:
+  InstancePointsOp(size_t m, size_t b, InstanceOptions o) : m_(m), b_(b), o_(o) {}
+  std::string type() const override { return "instance_points"; }
+  void forward(ExecContext& ctx) override {
+    ctx.launch("sampling", "instance_points")
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.out(0))
+        .arg(detail::u32(m_, "positions")).arg(detail::u32(b_, "instances"))
+        .arg(static_cast<int>(o_.ndc)).arg(o_.ax).arg(o_.ay).arg(o_.ndc_near)
+        .run2(m_, b_);
+  }
+  void backward(ExecContext&) override {}
+  std::vector<TensorId> saved_for_backward() const override { return {}; }
+
+ private:
+  size_t m_, b_;
+  InstanceOptions o_;
+};
+
 }  // namespace
 
 std::vector<float> camera_rows(const std::vector<Camera>& cameras) {
@@ -137,6 +156,23 @@ Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions&
   if (jitter.valid()) inputs.push_back(jitter);
   g.add(std::make_unique<StratifiedSamplesOp>(R, N, groups, options, jitter.valid()), inputs, outputs);
   return s;
+}
+
+Tensor instance_points(Tensor positions, Tensor transforms, const InstanceOptions& options) {
+  const std::string op = "instance_points";
+  if (positions.shape().rank() != 2 || positions.shape()[1] != 3)
+    bad(op, "positions must be [M, 3], got " + positions.shape().str());
+  if (transforms.shape().rank() != 2 || transforms.shape()[1] != 12)
+    bad(op, "transforms must be [B, 12], got " + transforms.shape().str());
+  for (const Tensor& t : {positions, transforms})
+    if (t.info().requires_grad) bad(op, "'" + t.info().name + "' cannot take a gradient");
+  if (options.ndc && (options.ax == 0.0f || options.ay == 0.0f || options.ndc_near <= 0.0f))
+    bad(op, "NDC constants must be non-zero and the near plane positive");
+  const size_t M = positions.shape()[0], B = transforms.shape()[0];
+  Graph& g = *positions.graph;
+  Tensor out = g.activation("instance.positions", B == 1 ? Shape{M, 3} : Shape{B, M, 3});
+  g.add(std::make_unique<InstancePointsOp>(M, B, options), {positions, transforms}, {out});
+  return out;
 }
 
 }  // namespace nova

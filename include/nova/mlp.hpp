@@ -31,4 +31,8 @@ struct Mlp {
 // initialised as PyTorch's nn.Linear does: uniform in +-1/sqrt(fan_in).
 Mlp build_mlp(Tensor input, const MlpConfig& config, const std::string& name = "mlp");
 
+// One dense layer with its own parameters `name`.w / `name`.b, initialised as build_mlp's:
+// x [rows, k] -> [rows, n], or [B, rows, k] -> [B, rows, n] for networks = B > 1.
+Tensor dense_layer(Tensor x, int n, Activation act, const std::string& name, int networks = 1);
+
 }  // namespace nova

@@ -60,4 +60,16 @@ struct Samples {
 // at inference (evenly spaced samples).
 Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions& options = {});
 
+// Composition: the positions [M, 3] of one render's samples as seen by B placed object
+// instances. transforms [B, 12]: per instance the world-to-object map (the inverse of its
+// placement, compose_spec.hpp), row-major 3x4. For NDC rays the map is applied in world
+// coordinates (NDC -> world -> map -> NDC) with the NDC constants of the rays:
+// ax = -fx / cx, ay = -fy / cy and the near plane. Returns [B, M, 3] ([M, 3] for B = 1),
+// the layout of a batched object MLP's input. Forward only (data).
+struct InstanceOptions {
+  bool ndc = false;
+  float ax = -1.0f, ay = -1.0f, ndc_near = 1.0f;
+};
+Tensor instance_points(Tensor positions, Tensor transforms, const InstanceOptions& options = {});
+
 }  // namespace nova

@@ -1,0 +1,177 @@
+// `nova eval --run RUN`: renders the scene's ground-truth views with the trained run and
+// reports PSNR (OpenCV's number on 8-bit images) and SSIM per view, their means, and for
+// synthetic scenes the composition targets; writes RUN/eval.json and the renders as PNGs.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "cli/options.hpp"
+#include "cli/run_setup.hpp"
+#include "nova/image_io.hpp"
+#include "nova/image_metrics.hpp"
+#include "nova/runtime.hpp"
+#include "nova/visualize.hpp"
+
+namespace nova::cli {
+namespace {
+
+struct Score {
+  std::string name;
+  double psnr = 0, ssim = 0;
+};
+
+std::string json_string(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    o += c;
+  }
+  return o + "\"";
+}
+
+void print_table(const std::string& title, const std::vector<Score>& scores) {
+  std::cout << title << "\n  " << std::left << std::setw(28) << "view" << std::right << std::setw(9) << "PSNR"
+            << std::setw(8) << "SSIM" << "\n";
+  for (const Score& s : scores)
+    std::cout << "  " << std::left << std::setw(28) << s.name << std::right << std::fixed << std::setprecision(2)
+              << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim << "\n";
+}
+
+std::pair<double, double> means(const std::vector<Score>& s) {
+  double p = 0, q = 0;
+  for (const Score& x : s) {
+    p += x.psnr;
+    q += x.ssim;
+  }
+  return {s.empty() ? 0 : p / s.size(), s.empty() ? 0 : q / s.size()};
+}
+
+void json_scores(std::ostream& o, const std::string& key, const std::vector<Score>& s) {
+  o << "  " << json_string(key) << ": [";
+  for (size_t i = 0; i < s.size(); ++i)
+    o << (i ? ",\n    " : "\n    ") << "{\"name\": " << json_string(s[i].name) << ", \"psnr\": " << std::setprecision(6)
+      << s[i].psnr << ", \"ssim\": " << s[i].ssim << "}";
+  o << "\n  ]";
+}
+
+}  // namespace
+
+int eval(const Args& args) {
+  po::options_description desc("nova eval options");
+  add_common_options(desc);
+  desc.add_options()("run", po::value<std::string>()->required(), "trained run folder")(
+      "scene", po::value<std::string>()->default_value(""), "scene folder (default: the run's)")(
+      "views", po::value<std::string>()->default_value("auto"),
+      "ground-truth views: cam0 (the paper's protocol: camera 0 at every time), heldout, all, or auto "
+      "(cam0 when the scene has it, else heldout, else the --split frames)")(
+      "split", po::value<std::string>()->default_value(""), "evaluate every frame of this split (Blender/D-NeRF: test)")(
+      "soft-blend", po::bool_switch(), "keep the learnt blending (no hard blending)");
+  po::variables_map vm;
+  if (!parse(args, desc, vm, "usage: nova eval --run RUN [--scene DIR] [--views auto|cam0|heldout|all] [--split test]"))
+    return 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string run_dir = vm["run"].as<std::string>();
+  const std::string split = vm["split"].as<std::string>();
+  OpenRun run = open_run(run_dir, vm["scene"].as<std::string>(), true);
+  Scene& scene = run.scene;
+  std::vector<GroundTruthView> views;
+  if (!split.empty()) {
+    // A held-out split of the same scene (its own frames are the ground truth).
+    Scene s = load_training_scene(run.files.scene, run.files.config, false, split);
+    for (size_t i = 0; i < s.frames.size(); ++i) {
+      Frame& f = s.frames[i];
+      char name[32];
+      std::snprintf(name, sizeof name, "%s_%03zu", split.c_str(), i);
+      views.push_back({name, split, static_cast<int>(i), f.time, f.camera, std::move(f.rgb)});
+    }
+  } else {
+    std::string kind = vm["views"].as<std::string>();
+    if (kind != "auto" && kind != "cam0" && kind != "heldout" && kind != "all")
+      throw Error("--views '" + kind + "' is not one of auto, cam0, heldout, all");
+    const auto has = [&](const std::string& k) {
+      for (const auto& v : scene.gt_views)
+        if (v.kind == k) return true;
+      return false;
+    };
+    if (kind == "auto") kind = has("cam0") ? "cam0" : "heldout";
+    for (auto& v : scene.gt_views)
+      if (kind == "all" || v.kind == kind) views.push_back(std::move(v));
+    if (views.empty() && scene.compose_gt.empty())
+      throw Error("scene '" + scene.source + "' has no ground-truth views of kind '" + kind +
+                  "' (train with --holdout N to hold frames out, or use --split)");
+  }
+
+  const DeviceInfo device = select_device(vm["device"].as<std::string>());
+  Runtime rt(device, false);
+  ViewRenderer renderer(rt, run.files.config, run.geometry, run.files.checkpoint);
+  const bool hard = !vm["soft-blend"].as<bool>();
+  const std::string pictures = run_dir + "/eval";
+  std::filesystem::create_directories(pictures);
+  std::vector<Score> scores, compose;
+  for (size_t i = 0; i < views.size(); ++i) {
+    const GroundTruthView& v = views[i];
+    ViewRequest req;
+    req.camera = v.camera;
+    req.hard_blend = hard;
+    req.instances = scene_instances(scene.num_objects, v.time);
+    const ViewImage img = renderer.render(req);
+    const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
+    std::string stem = v.name;
+    for (char& c : stem)
+      if (c == '/') c = '_';
+    if (stem.size() > 4 && stem.substr(stem.size() - 4) == ".png") stem.resize(stem.size() - 4);
+    write_png(pictures + "/" + stem + ".png", out);
+    scores.push_back({stem, psnr(out, v.rgb), ssim(out, v.rgb)});
+    std::cerr << "\revaluated " << i + 1 << "/" << views.size() << std::flush;
+  }
+  if (!views.empty()) std::cerr << "\n";
+  for (size_t i = 0; i < scene.compose.targets.size(); ++i) {
+    const ComposeTarget& t = scene.compose.targets[i];
+    const Image8* gt = nullptr;
+    for (const auto& c : scene.compose_gt)
+      if (c.name == t.name) gt = &c.rgb;
+    if (!gt || t.camera < 0 || t.camera >= static_cast<int>(scene.frames.size())) continue;
+    ViewRequest req;
+    req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
+    req.background = t.background;
+    req.hard_blend = hard;
+    for (const ComposeInstance& inst : t.instances) req.instances.push_back(placed_instance(inst));
+    const ViewImage img = renderer.render(req);
+    const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
+    write_png(pictures + "/compose_" + t.name + ".png", out);
+    compose.push_back({t.name, psnr(out, *gt), ssim(out, *gt)});
+  }
+
+  const auto [mp, ms] = means(scores);
+  const auto [cp, cs] = means(compose);
+  if (!scores.empty()) print_table("views", scores);
+  if (!compose.empty()) print_table("composition targets", compose);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::ostringstream json;
+  json << "{\n  \"run\": " << json_string(run_dir) << ",\n  \"scene\": " << json_string(scene.source)
+       << ",\n  \"step\": " << run.files.checkpoint.get("step") << ",\n";
+  json_scores(json, "views", scores);
+  json << ",\n  \"mean_psnr\": " << std::setprecision(6) << mp << ",\n  \"mean_ssim\": " << ms << ",\n";
+  json_scores(json, "compose", compose);
+  json << ",\n  \"compose_mean_psnr\": " << cp << ",\n  \"compose_mean_ssim\": " << cs
+       << ",\n  \"seconds\": " << secs << "\n}\n";
+  const std::string path = run_dir + "/eval.json";
+  {
+    std::ofstream o(path + ".tmp");
+    o << json.str();
+    if (!o.flush()) throw Error("cannot write '" + path + "'");
+  }
+  std::filesystem::rename(path + ".tmp", path);
+  std::cout << std::fixed << std::setprecision(2);
+  if (!scores.empty()) std::cout << "mean PSNR " << mp << " dB, SSIM " << std::setprecision(4) << ms << " over " << scores.size() << " views\n";
+  if (!compose.empty())
+    std::cout << "composition targets: mean PSNR " << std::setprecision(2) << cp << " dB over " << compose.size() << "\n";
+  std::cout << "wrote " << path << " and renders in " << pictures << "/ (" << std::setprecision(1) << secs << " s)\n";
+  return 0;
+}
+
+}  // namespace nova::cli

@@ -1,0 +1,141 @@
+// `nova render --run RUN --out DIR`: renders a trained run. Without --compose: one camera
+// (a training camera, or --pose) at one time or at every frame's time, writing colour,
+// depth and per-NeRF masks as PNG frames (and an MP4 with --video). With --compose SPEC:
+// every target of a composition spec (compose_spec.hpp), hard-blended.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "cli/options.hpp"
+#include "cli/run_setup.hpp"
+#include "nova/compose_spec.hpp"
+#include "nova/image_io.hpp"
+#include "nova/runtime.hpp"
+#include "nova/visualize.hpp"
+
+namespace nova::cli {
+namespace {
+
+Camera parse_pose(const std::string& text, Camera base) {
+  std::istringstream in(text);
+  std::array<double, 12> m{};
+  for (double& x : m)
+    if (!(in >> x)) throw Error("--pose: expected 12 numbers (the 3x4 camera-to-world matrix, row-major), got '" + text + "'");
+  std::string rest;
+  if (in >> rest) throw Error("--pose: more than 12 numbers in '" + text + "'");
+  for (double x : m)
+    if (!std::isfinite(x)) throw Error("--pose: '" + text + "' holds a non-finite number");
+  base.c2w = m;
+  return base;
+}
+
+std::string frame_name(size_t i) {
+  char b[16];
+  std::snprintf(b, sizeof b, "%03zu.png", i);
+  return b;
+}
+
+// Writes the colour, depth and masks of one view as <stem>.png, <stem>_depth.png and
+// <stem>_mask<k>.png (k = 0 background, then the instances).
+Image8 write_view(const ViewImage& v, const std::string& dir, const std::string& stem, bool masks) {
+  Image8 rgb = float_rgb_to_image(v.rgb, v.width, v.height);
+  write_png(dir + "/" + stem + ".png", rgb);
+  const DepthRange d = robust_depth_range(v.depth);
+  write_png(dir + "/" + stem + "_depth.png", depth_to_color(v.depth, v.width, v.height, d.lo, d.hi));
+  if (masks)
+    for (size_t k = 0; k < v.masks.size(); ++k)
+      write_png(dir + "/" + stem + "_mask" + std::to_string(k) + ".png", float_to_gray(v.masks[k], v.width, v.height));
+  return rgb;
+}
+
+}  // namespace
+
+int render(const Args& args) {
+  po::options_description desc("nova render options");
+  add_common_options(desc);
+  desc.add_options()("run", po::value<std::string>()->required(), "trained run folder")(
+      "out", po::value<std::string>()->required(), "output folder (must not exist unless --force)")(
+      "scene", po::value<std::string>()->default_value(""), "scene folder (default: the run's)")(
+      "camera", po::value<int>()->default_value(0), "training camera (frame index) to render from")(
+      "pose", po::value<std::string>(), "12 numbers: a camera-to-world 3x4 matrix (scene coordinates) instead of --camera")(
+      "time", po::value<double>(), "object time in [-1, 1] (frame i of N has 2i/N - 1); default: every frame's time")(
+      "compose", po::value<std::string>(), "composition spec: render each of its targets (see README)")(
+      "video", po::bool_switch(), "also write video.mp4 of the colour frames")(
+      "fps", po::value<double>()->default_value(10.0), "frame rate of the video")(
+      "soft-blend", po::bool_switch(), "keep the learnt blending (no hard blending of the static NeRF)")(
+      "no-masks", po::bool_switch(), "skip the per-NeRF mask PNGs")(
+      "force", po::bool_switch(), "replace an existing output folder");
+  po::variables_map vm;
+  if (!parse(args, desc, vm, "usage: nova render --run RUN --out DIR [--camera I | --pose M] [--time T] [--compose SPEC] [--video]"))
+    return 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  OpenRun run = open_run(vm["run"].as<std::string>(), vm["scene"].as<std::string>(), false);
+  const Scene& scene = run.scene;
+  const bool masks = !vm["no-masks"].as<bool>(), hard = !vm["soft-blend"].as<bool>();
+  ComposeSpec spec;
+  if (vm.count("compose")) {
+    spec = read_compose_spec(vm["compose"].as<std::string>());
+    for (const ComposeTarget& t : spec.targets) {
+      if (t.camera < 0 || t.camera >= static_cast<int>(scene.frames.size()))
+        throw Error("compose spec '" + vm["compose"].as<std::string>() + "', target '" + t.name + "': camera " +
+                    std::to_string(t.camera) + " is not a training frame (0.." + std::to_string(scene.frames.size() - 1) + ")");
+      for (const ComposeInstance& i : t.instances)
+        if (i.object < 1 || i.object > scene.num_objects)
+          throw Error("compose spec '" + vm["compose"].as<std::string>() + "', target '" + t.name + "': object " +
+                      std::to_string(i.object) + " does not exist (the run has " + std::to_string(scene.num_objects) +
+                      " object NeRF(s))");
+    }
+  }
+  const int cam = vm["camera"].as<int>();
+  if (cam < 0 || cam >= static_cast<int>(scene.frames.size()))
+    throw Error("--camera " + std::to_string(cam) + ": the scene has frames 0.." + std::to_string(scene.frames.size() - 1));
+  Camera camera = scene.frames[static_cast<size_t>(cam)].camera;
+  if (vm.count("pose")) camera = parse_pose(vm["pose"].as<std::string>(), camera);
+
+  const DeviceInfo device = select_device(vm["device"].as<std::string>());
+  Runtime rt(device, false);
+  ViewRenderer renderer(rt, run.files.config, run.geometry, run.files.checkpoint);
+  StagedFolder out(vm["out"].as<std::string>(), vm["force"].as<bool>());
+  std::vector<Image8> frames;
+  size_t views = 0;
+  if (!spec.empty()) {
+    for (const ComposeTarget& t : spec.targets) {
+      ViewRequest req;
+      req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
+      req.background = t.background;
+      req.hard_blend = hard;
+      for (const ComposeInstance& i : t.instances) req.instances.push_back(placed_instance(i));
+      frames.push_back(write_view(renderer.render(req), out.path(), t.name, masks));
+      std::cerr << "rendered " << t.name << " (" << t.instances.size() << " instances)\n";
+      ++views;
+    }
+  } else {
+    std::vector<double> times;
+    if (vm.count("time")) {
+      const double t = vm["time"].as<double>();
+      if (!std::isfinite(t) || t < -1.0 || t > 1.0) throw Error("--time " + std::to_string(t) + " is outside [-1, 1]");
+      times.push_back(t);
+    } else {
+      for (const Frame& f : scene.frames) times.push_back(f.time);
+    }
+    for (size_t i = 0; i < times.size(); ++i) {
+      ViewRequest req;
+      req.camera = camera;
+      req.hard_blend = hard;
+      req.instances = scene_instances(scene.num_objects, times[i]);
+      frames.push_back(write_view(renderer.render(req), out.path(), frame_name(i).substr(0, 3), masks));
+      std::cerr << "\rrendered " << i + 1 << "/" << times.size() << std::flush;
+      ++views;
+    }
+    std::cerr << "\n";
+  }
+  if (vm["video"].as<bool>()) write_video(frames, out.path() + "/video.mp4", vm["fps"].as<double>());
+  out.commit();
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::cout << "rendered " << views << " view(s) into " << vm["out"].as<std::string>() << " in " << secs << " s\n";
+  return 0;
+}
+
+}  // namespace nova::cli

@@ -1,0 +1,56 @@
+#include "cli/run_setup.hpp"
+
+#include <filesystem>
+
+#include "nova/error.hpp"
+#include "nova/scene_io.hpp"
+
+namespace nova::cli {
+namespace fs = std::filesystem;
+
+Scene load_training_scene(const std::string& dir, const TrainConfig& config, bool load_gt,
+                          const std::string& split) {
+  LoadOptions o;
+  o.factor = config.factor;
+  o.load_gt = load_gt;
+  o.split = split;
+  Scene s = load_scene(dir, o);
+  if (config.holdout > 0 && split == "train") hold_out_frames(s, config.holdout);
+  return s;
+}
+
+OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool load_gt,
+                 const std::string& split) {
+  OpenRun r{read_run(run_dir), {}, {}};
+  const std::string dir = scene_dir.empty() ? r.files.scene : scene_dir;
+  if (dir.empty()) throw Error("run '" + run_dir + "' does not name its scene: pass --scene");
+  r.scene = load_training_scene(dir, r.files.config, load_gt, split);
+  r.geometry = ray_geometry(r.scene);
+  return r;
+}
+
+StagedFolder::StagedFolder(std::string dir, bool replace) : dir_(std::move(dir)) {
+  while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
+  if (fs::exists(dir_) && !replace)
+    throw Error("output folder '" + dir_ + "' already exists (pass --force to replace it)");
+  staging_ = dir_ + ".partial";
+  fs::remove_all(staging_);
+  std::error_code ec;
+  fs::create_directories(staging_, ec);
+  if (ec) throw Error("cannot create '" + staging_ + "': " + ec.message());
+}
+
+StagedFolder::~StagedFolder() {
+  if (!committed_) {
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+  }
+}
+
+void StagedFolder::commit() {
+  fs::remove_all(dir_);
+  fs::rename(staging_, dir_);
+  committed_ = true;
+}
+
+}  // namespace nova::cli

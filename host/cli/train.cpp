@@ -1,0 +1,113 @@
+// `nova train --scene DIR --out RUN [--config FILE] [--resume] [--OPTION VALUE ...]`: trains a
+// NOVA scene headless. Options come from the preset, then the config file, then the command
+// line (later wins); every option of the table in train_config.hpp is a flag here.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "cli/options.hpp"
+#include "cli/run_setup.hpp"
+#include "nova/runtime.hpp"
+#include "nova/scene_io.hpp"
+#include "nova/trainer.hpp"
+
+namespace nova::cli {
+namespace {
+
+std::string clock_text(double s) {
+  const long t = static_cast<long>(s + 0.5);
+  char buf[32];
+  if (t >= 3600)
+    std::snprintf(buf, sizeof buf, "%ldh%02ldm", t / 3600, t / 60 % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%ldm%02lds", t / 60, t % 60);
+  return buf;
+}
+
+void print_progress(const TrainProgress& p) {
+  char line[256];
+  std::snprintf(line, sizeof line, "step %7ld/%ld  %-8s loss %.5f  psnr %5.2f dB  lr %.2e  %6.0f rays/s  %s  eta %s",
+                p.step, p.total, p.phase.c_str(), p.loss, p.psnr, p.lr, p.rays_per_s,
+                clock_text(p.seconds).c_str(), clock_text(p.eta_seconds).c_str());
+  std::cerr << line << "\n";
+}
+
+}  // namespace
+
+int train(const Args& args) {
+  po::options_description desc("nova train options");
+  add_common_options(desc);
+  desc.add_options()("scene", po::value<std::string>()->required(), "scene folder (nova synth, NOVA/DynamicNeRF, LLFF, Blender)")(
+      "out", po::value<std::string>()->required(), "run folder (config.ini, metrics.jsonl, checkpoint.bin)")(
+      "config", po::value<std::string>(), "config file of key = value lines (a run's config.ini works)")(
+      "resume", po::bool_switch(), "continue the run in --out from its checkpoint")(
+      "profile", po::bool_switch(), "time every op and print the table at the end");
+  po::options_description table("training options (default: the quick preset; reference values in [])");
+  const TrainConfig quick = preset_config("quick"), reference = preset_config("reference");
+  for (const ConfigOption& o : config_options()) {
+    std::string help = o.help + " (" + o.get(quick) + ")";
+    if (o.get(reference) != o.get(quick)) help += " [" + o.get(reference) + "]";
+    table.add_options()(o.key.c_str(), po::value<std::string>(), help.c_str());
+  }
+  desc.add(table);
+  po::variables_map vm;
+  if (!parse(args, desc, vm, "usage: nova train --scene DIR --out RUN [--config FILE] [--resume] [--OPTION VALUE ...]"))
+    return 0;
+  const std::string out = vm["out"].as<std::string>();
+  const bool resume = vm["resume"].as<bool>();
+
+  namespace fs = std::filesystem;
+  if (resume && !fs::exists(out + "/" + kCheckpointFile))
+    throw Error("--resume: run folder '" + out + "' has no " + kCheckpointFile);
+
+  // Preset, then the config file (on --resume: the run's own), then the command line.
+  std::string config_path = vm.count("config") ? vm["config"].as<std::string>() : "";
+  if (resume && config_path.empty()) config_path = out + "/" + kConfigFile;
+  TrainConfig config = preset_config(vm.count("preset") ? vm["preset"].as<std::string>() : "quick");
+  if (!config_path.empty()) {
+    std::ifstream in(config_path);
+    if (!in) throw Error("config file '" + config_path + "' cannot be read");
+    std::stringstream text;
+    text << in.rdbuf();
+    std::vector<std::pair<std::string, std::string>> others;  // e.g. the scene of a config.ini
+    config = parse_config_text(text.str(), config_path, &others);
+    for (auto& [k, v] : others)
+      if (k != "scene") throw Error(config_path + ": unknown option '" + k + "'");
+  }
+  for (const ConfigOption& o : config_options())
+    if (o.key != "preset" && vm.count(o.key)) set_config_value(config, o.key, vm[o.key].as<std::string>());
+  validate(config);
+
+  if (!resume && fs::exists(out) && !fs::is_empty(out))
+    throw Error("run folder '" + out + "' already exists and is not empty: pass --resume to continue it, or choose another --out");
+
+  Scene scene = load_training_scene(vm["scene"].as<std::string>(), config);
+  const DeviceInfo device = select_device(vm["device"].as<std::string>());
+  const bool profile = vm["profile"].as<bool>();
+  Runtime rt(device, profile);
+  std::cerr << "nova train: " << scene.name << ", " << scene.frames.size() << " frames at "
+            << scene.frames[0].rgb.width << "x" << scene.frames[0].rgb.height << ", 1 + " << scene.num_objects
+            << " NeRFs, preset " << config.preset << ", " << config.pretrain_steps << " + " << config.steps
+            << " steps on " << device.name << "\n";
+  const bool created = !fs::exists(out);
+  try {
+    Trainer trainer(rt, scene, config, out);
+    if (resume) {
+      trainer.resume();
+      std::cerr << "resumed at step " << trainer.step() << "\n";
+    }
+    trainer.set_profile(profile);
+    trainer.run(print_progress);
+    if (profile) std::cerr << trainer.profile_table();
+  } catch (...) {
+    // A run that failed before its first checkpoint leaves nothing behind.
+    if (created && !fs::exists(out + "/" + kCheckpointFile)) fs::remove_all(out);
+    throw;
+  }
+  std::cout << "trained " << out << " (" << kCheckpointFile << ", " << kMetricsFile << ", " << kConfigFile << ")\n";
+  return 0;
+}
+
+}  // namespace nova::cli

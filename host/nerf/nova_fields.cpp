@@ -1,0 +1,60 @@
+#include "nova/nova_fields.hpp"
+
+#include <algorithm>
+
+#include "nova/error.hpp"
+#include "nova/mlp.hpp"
+#include "nova/ops.hpp"
+
+namespace nova {
+namespace {
+
+MlpConfig trunk_config(const FieldConfig& c, int outputs, int networks) {
+  if (c.pos_freqs < 0 || c.dir_freqs < 0)
+    throw Error("field: encoding frequencies must be >= 0", kExitUsage);
+  MlpConfig m;
+  m.depth = c.depth;
+  m.width = c.width;
+  m.skip = c.skip;
+  m.outputs = outputs;
+  m.output_activation = Activation::Identity;
+  m.networks = networks;
+  return m;
+}
+
+}  // namespace
+
+Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& c) {
+  if (positions.shape().rank() != 2 || positions.shape()[1] != 3)
+    throw Error("static field: positions must be [M, 3], got " + positions.shape().str(),
+                kExitInternal);
+  // The trunk's output layer is the reference's feature_linear; sigma and blend are linear
+  // heads on the feature (the same function class as heads on the last hidden layer).
+  Tensor feature = build_mlp(positional_encoding(positions, c.pos_freqs),
+                             trunk_config(c, c.width, 1), "static.trunk").output;
+  Tensor sigma_blend = dense_layer(feature, 2, Activation::Identity, "static.sigma_blend");
+  Tensor colour_in = c.view_dirs ? concat({feature, positional_encoding(viewdirs, c.dir_freqs)})
+                                 : feature;
+  Tensor hidden = dense_layer(colour_in, std::max(1, c.width / 2), Activation::ReLU, "static.view");
+  Tensor rgb = dense_layer(hidden, 3, Activation::Identity, "static.rgb");
+  return concat({rgb, sigma_blend});
+}
+
+Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c) {
+  const Shape& ps = positions.shape();
+  const bool batched = ps.rank() == 3;
+  if (!(ps.rank() == 2 || batched) || ps.cols() != 3)
+    throw Error("object fields: positions must be [B, M, 3] or [M, 3], got " + ps.str(),
+                kExitInternal);
+  Shape ts = ps;
+  ts.dims.back() = 1;
+  if (!(times.shape() == ts))
+    throw Error("object fields: times must be " + ts.str() + ", got " + times.shape().str(),
+                kExitInternal);
+  const int networks = batched ? static_cast<int>(ps[0]) : 1;
+  Tensor xyzt = concat({positions, times});
+  return build_mlp(positional_encoding(xyzt, c.pos_freqs), trunk_config(c, 5, networks),
+                   "objects.trunk").output;
+}
+
+}  // namespace nova

@@ -1,0 +1,142 @@
+#include "nova/nova_graphs.hpp"
+
+#include "nova/error.hpp"
+#include "nova/nova_fields.hpp"
+#include "nova/ops.hpp"
+#include "nova/rays.hpp"
+
+namespace nova {
+namespace {
+
+Shape per_group(size_t b, size_t m, size_t c) { return b == 1 ? Shape{m, c} : Shape{b, m, c}; }
+
+SampleOptions sample_options(int samples, const RayGeometry& g, std::vector<int> groups) {
+  SampleOptions s;
+  s.samples = samples;
+  s.near = g.near;
+  s.far = g.far;
+  s.groups = std::move(groups);
+  return s;
+}
+
+}  // namespace
+
+RayGeometry ray_geometry(const Scene& scene) {
+  if (scene.frames.empty()) throw Error("scene '" + scene.name + "' has no frames");
+  RayGeometry g;
+  g.ndc = scene.ndc;
+  g.num_objects = scene.num_objects;
+  if (scene.ndc) {
+    const Camera& c = scene.frames.front().camera;
+    g.near = 0.0f;
+    g.far = 1.0f;
+    g.ax = static_cast<float>(-c.fx / c.cx);
+    g.ay = static_cast<float>(-c.fy / c.cy);
+  } else {
+    if (!(scene.far > scene.near) || scene.near < 0)
+      throw Error("scene '" + scene.name + "': bounds [" + std::to_string(scene.near) + ", " +
+                  std::to_string(scene.far) + "] are not a valid depth range");
+    g.near = static_cast<float>(scene.near);
+    g.far = static_cast<float>(scene.far);
+  }
+  return g;
+}
+
+std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& geo) {
+  auto s = std::make_unique<StepGraph>();
+  Graph& g = s->graph;
+  const size_t R = static_cast<size_t>(c.rays), S = static_cast<size_t>(c.samples);
+  s->nerfs = 1;
+  s->pixels = g.input("pixels", Shape{R, 2});
+  s->cameras = g.input("cameras", Shape{1, kCameraFloats});
+  s->jitter = g.input("jitter", Shape{R, S});
+  if (c.noise_std > 0) s->noise = g.input("noise", Shape{1, R * S});
+  s->target_rgb = g.input("target_rgb", Shape{R, 3});
+  Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
+  Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1}));
+  Tensor raw = build_static_field(smp.positions[0], smp.viewdirs[0], c.field);
+  RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
+  s->loss = pretrain_rgb_loss(out.rgb, s->target_rgb);
+  s->psnr_mse = s->loss;
+  s->terms = {{"static_rgb", s->loss}};
+  g.set_loss(s->loss);
+  return s;
+}
+
+std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeometry& geo) {
+  const int K = geo.num_objects;
+  if (K < 1) throw Error("joint training needs at least one object NeRF", kExitInternal);
+  auto s = std::make_unique<StepGraph>();
+  Graph& g = s->graph;
+  const size_t R = static_cast<size_t>(c.rays), S = static_cast<size_t>(c.samples);
+  const size_t N = static_cast<size_t>(1 + K);
+  s->nerfs = static_cast<int>(N);
+  s->pixels = g.input("pixels", Shape{R, 2});
+  s->cameras = g.input("cameras", Shape{N, kCameraFloats});
+  s->jitter = g.input("jitter", Shape{R, S});
+  if (c.noise_std > 0) s->noise = g.input("noise", Shape{N, R * S});
+  s->times = g.input("times", per_group(static_cast<size_t>(K), R * S, 1));
+  s->target_rgb = g.input("target_rgb", Shape{R, 3});
+  s->target_masks = g.input("target_masks", Shape{N, R});
+  Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
+  Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1, K}));
+  Tensor raw_static = build_static_field(smp.positions[0], smp.viewdirs[0], c.field);
+  Tensor raw_objects = build_object_fields(smp.positions[1], s->times, c.field);
+  Tensor raw = stack({raw_static, raw_objects});
+  RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
+  NovelViewLoss l = novel_view_loss(out, raw, smp.delta, s->noise,
+                                    {s->target_rgb, s->target_masks}, c.weights);
+  s->loss = l.total;
+  for (auto [name, t] : {std::pair<const char*, Tensor>{"full_rgb", l.full_rgb}, {"nerf_rgb", l.nerf_rgb},
+                         {"mask", l.mask}, {"blending", l.blending}, {"alpha", l.alpha}})
+    if (t.valid()) s->terms.emplace_back(name, t);
+  // The progress PSNR is of the composite colour; without its loss term it is measured
+  // separately (a forward-only mse nothing back-propagates through).
+  s->psnr_mse = l.full_rgb.valid() ? l.full_rgb : mse(out.rgb, s->target_rgb);
+  g.set_loss(s->loss);
+  for (auto& [name, t] : s->terms) g.keep(t);
+  g.keep(s->psnr_mse);
+  return s;
+}
+
+std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& f, int samples, const RayGeometry& geo,
+                                            int rays, bool background, int instances,
+                                            bool hard_blend) {
+  if (!background && instances < 1)
+    throw Error("a view needs the background or at least one object instance");
+  auto v = std::make_unique<ViewGraph>();
+  Graph& g = v->graph;
+  v->rays = rays;
+  v->instances = instances;
+  v->background = background;
+  const size_t R = static_cast<size_t>(rays), S = static_cast<size_t>(samples);
+  const int N = (background ? 1 : 0) + instances;
+  // Every NeRF renders along the same camera; one copy per NeRF gives the per-NeRF spacing
+  // tensor render_composite takes. Only the first group's positions are read.
+  v->pixels = g.input("pixels", Shape{R, 2});
+  v->cameras = g.input("cameras", Shape{static_cast<size_t>(N), kCameraFloats});
+  Rays r = generate_rays(v->pixels, v->cameras, {.ndc = geo.ndc});
+  Samples smp = stratified_samples(r, Tensor{}, sample_options(samples, geo, N == 1 ? std::vector<int>{1}
+                                                                                  : std::vector<int>{1, N - 1}));
+  std::vector<Tensor> parts;
+  if (background) parts.push_back(build_static_field(smp.positions[0], smp.viewdirs[0], f));
+  if (instances > 0) {
+    const size_t B = static_cast<size_t>(instances);
+    v->transforms = g.input("transforms", Shape{B, 12});
+    v->times = g.input("times", per_group(B, R * S, 1));
+    InstanceOptions io;
+    io.ndc = geo.ndc;
+    io.ax = geo.ax;
+    io.ay = geo.ay;
+    Tensor pos = instance_points(smp.positions[0], v->transforms, io);
+    parts.push_back(build_object_fields(pos, v->times, f));
+  }
+  Tensor raw = parts.size() == 1 ? parts[0] : stack(parts);
+  RenderOptions ro;
+  ro.hard_blend = hard_blend && background && instances > 0;
+  v->out = render_composite(raw, smp.delta, smp.z, Tensor{}, ro);
+  for (Tensor t : {v->out.rgb, v->out.mask, v->out.depth, v->out.acc}) g.keep(t);
+  return v;
+}
+
+}  // namespace nova

@@ -1,0 +1,172 @@
+#include "nova/view_renderer.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "nova/error.hpp"
+#include "nova/rays.hpp"
+#include "nova/trainer.hpp"
+
+namespace nova {
+namespace {
+
+// The inverse of a rigid 3x4 [R | t]: [R^T | -R^T t].
+std::array<double, 12> invert_rigid(const std::array<double, 12>& m) {
+  std::array<double, 12> r{};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) r[i * 4 + j] = m[j * 4 + i];
+    r[i * 4 + 3] = -(m[0 * 4 + i] * m[3] + m[1 * 4 + i] * m[7] + m[2 * 4 + i] * m[11]);
+  }
+  return r;
+}
+
+}  // namespace
+
+RunFiles read_run(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir)) throw Error("run folder '" + dir + "' does not exist");
+  const std::string cfg = dir + "/" + kConfigFile;
+  std::ifstream in(cfg);
+  if (!in) throw Error("run folder '" + dir + "' has no " + kConfigFile + " (not a nova run?)");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::vector<std::pair<std::string, std::string>> others;
+  RunFiles r;
+  r.dir = dir;
+  r.config = parse_config_text(text.str(), cfg, &others);
+  for (auto& [k, v] : others)
+    if (k == "scene") r.scene = v;
+  if (!fs::exists(dir + "/" + kCheckpointFile))
+    throw Error("run folder '" + dir + "' has no " + kCheckpointFile + " yet (training has not saved one)");
+  r.checkpoint = read_checkpoint(dir + "/" + kCheckpointFile);
+  if (r.checkpoint.get("networks") != network_fingerprint(r.config))
+    throw Error("run folder '" + dir + "': the checkpoint's networks (" + r.checkpoint.get("networks") +
+                ") differ from " + kConfigFile + " (" + network_fingerprint(r.config) + ")");
+  return r;
+}
+
+std::vector<PlacedInstance> scene_instances(int objects, double time) {
+  std::vector<PlacedInstance> v;
+  for (int k = 1; k <= objects; ++k) v.push_back({k, time, {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}});
+  return v;
+}
+
+PlacedInstance placed_instance(const ComposeInstance& inst) {
+  return {inst.object, inst.time, invert_rigid(instance_transform(inst))};
+}
+
+struct ViewRenderer::Cached {
+  std::unique_ptr<ViewGraph> graph;
+  std::unique_ptr<Executor> exec;
+  std::vector<int> loaded_objects;  // which object's weights each instance slot holds
+};
+
+ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeometry& geometry,
+                           const Checkpoint& checkpoint, int chunk_rays)
+    : rt_(rt), config_(config), geometry_(geometry), checkpoint_(checkpoint) {
+  if (checkpoint.get("objects") != std::to_string(geometry.num_objects))
+    throw Error("the run trained " + checkpoint.get("objects") + " object NeRF(s), the scene has " +
+                std::to_string(geometry.num_objects));
+  for (const auto& a : checkpoint.arrays)
+    if (a.name.rfind(kObjectPrefix, 0) == 0) has_objects_ = true;
+  const long rows = std::max<long>(config.samples, (1L << 24) / std::max(64, config.field.width));
+  chunk_rays_ = chunk_rays > 0 ? chunk_rays : static_cast<int>(std::max<long>(1, rows / config.samples));
+}
+
+ViewRenderer::~ViewRenderer() = default;
+
+ViewRenderer::Cached& ViewRenderer::graph_for(bool background, int instances, int rays) {
+  auto& slot = graphs_[{background, instances, rays}];
+  if (!slot) {
+    slot = std::make_unique<Cached>();
+    slot->graph = build_view_graph(config_.field, config_.samples, geometry_, rays, background,
+                                   instances, true);
+    slot->exec = std::make_unique<Executor>(rt_, slot->graph->graph);
+    slot->loaded_objects.assign(static_cast<size_t>(instances), 0);
+    for (Tensor p : slot->graph->graph.parameters())
+      if (p.info().name.rfind(kStaticPrefix, 0) == 0) slot->exec->set(p, checkpoint_.array(p.info().name).values);
+  }
+  return *slot;
+}
+
+ViewImage ViewRenderer::render(const ViewRequest& req) {
+  const int K = geometry_.num_objects;
+  for (const PlacedInstance& inst : req.instances)
+    if (inst.object < 1 || inst.object > K)
+      throw Error("object " + std::to_string(inst.object) + " does not exist: the run has " + std::to_string(K) +
+                  " object NeRF(s) (1.." + std::to_string(K) + ")");
+  std::vector<PlacedInstance> instances = req.instances;
+  if (!instances.empty() && !has_objects_) {
+    if (!req.background)
+      throw Error("the run has no trained object NeRFs yet (its checkpoint is from static pretraining)");
+    instances.clear();  // a pretraining checkpoint: the background alone
+  }
+  const int B = static_cast<int>(instances.size());
+  // Small views run as one chunk of exactly their pixels (no padded rays).
+  const int pixels_in_view = req.camera.width * req.camera.height;
+  if (pixels_in_view <= 0) throw Error("the camera has no pixels (" + std::to_string(req.camera.width) + "x" +
+                                       std::to_string(req.camera.height) + ")");
+  Cached& c = graph_for(req.background, B, std::min(chunk_rays_, pixels_in_view));
+  ViewGraph& vg = *c.graph;
+  // Object weights for each instance slot: slice `object` of the trained [K, ...] arrays.
+  std::vector<int> wanted;
+  for (const PlacedInstance& i : instances) wanted.push_back(i.object);
+  if (wanted != c.loaded_objects) {
+    for (Tensor p : vg.graph.parameters()) {
+      const std::string& name = p.info().name;
+      if (name.rfind(kObjectPrefix, 0) != 0) continue;
+      const CheckpointArray& a = checkpoint_.array(name);
+      const size_t slice = a.values.size() / static_cast<size_t>(K);
+      std::vector<float> v;
+      v.reserve(slice * static_cast<size_t>(B));
+      for (int o : wanted) v.insert(v.end(), a.values.begin() + (o - 1) * slice, a.values.begin() + o * slice);
+      c.exec->set(p, v);
+    }
+    c.loaded_objects = wanted;
+  }
+  const size_t R = static_cast<size_t>(vg.rays), S = static_cast<size_t>(config_.samples);
+  const int N = (req.background ? 1 : 0) + B;
+  c.exec->set(vg.cameras, camera_rows(std::vector<Camera>(static_cast<size_t>(N), req.camera)));
+  if (B > 0) {
+    std::vector<float> xf, times;
+    for (const PlacedInstance& i : instances) {
+      for (double x : i.world_to_object) xf.push_back(static_cast<float>(x));
+      times.insert(times.end(), R * S, static_cast<float>(i.time));
+    }
+    c.exec->set(vg.transforms, xf);
+    c.exec->set(vg.times, times);
+  }
+
+  const int W = req.camera.width, H = req.camera.height;
+  const size_t P = static_cast<size_t>(W) * H;
+  ViewImage img;
+  img.width = W;
+  img.height = H;
+  img.rgb.resize(P * 3);
+  img.depth.resize(P);
+  img.acc.resize(P);
+  img.masks.assign(static_cast<size_t>(N), std::vector<float>(P));
+  std::vector<float> pixels(R * 2);
+  for (size_t first = 0; first < P; first += R) {
+    const size_t n = std::min(R, P - first);
+    for (size_t r = 0; r < R; ++r) {
+      const size_t p = first + std::min(r, n - 1);  // the last chunk repeats its last pixel
+      pixels[r * 2] = static_cast<float>(p % static_cast<size_t>(W));
+      pixels[r * 2 + 1] = static_cast<float>(p / static_cast<size_t>(W));
+    }
+    c.exec->set(vg.pixels, pixels);
+    c.exec->forward();
+    const std::vector<float> rgb = c.exec->get(vg.out.rgb), depth = c.exec->get(vg.out.depth),
+                             acc = c.exec->get(vg.out.acc), mask = c.exec->get(vg.out.mask);
+    std::copy_n(rgb.begin(), n * 3, img.rgb.begin() + static_cast<long>(first * 3));
+    std::copy_n(depth.begin(), n, img.depth.begin() + static_cast<long>(first));
+    std::copy_n(acc.begin(), n, img.acc.begin() + static_cast<long>(first));
+    for (int k = 0; k < N; ++k)
+      std::copy_n(mask.begin() + static_cast<long>(k * R), n, img.masks[static_cast<size_t>(k)].begin() + static_cast<long>(first));
+  }
+  return img;
+}
+
+}  // namespace nova

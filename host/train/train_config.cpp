@@ -1,0 +1,284 @@
+#include "nova/train_config.hpp"
+
+#include <charconv>
+#include <cstdio>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "nova/error.hpp"
+
+namespace nova {
+namespace {
+
+[[noreturn]] void bad_value(const std::string& key, const std::string& value, const std::string& why) {
+  throw Error("option '" + key + "': '" + value + "' " + why);
+}
+
+std::string trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  const size_t b = s.find_last_not_of(" \t\r");
+  return s.substr(a, b - a + 1);
+}
+
+long parse_int(const std::string& key, const std::string& text, long lo, long hi) {
+  const std::string v = trim(text);
+  long x = 0;
+  auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+  if (ec != std::errc() || end != v.data() + v.size() || v.empty())
+    bad_value(key, text, "is not an integer");
+  if (x < lo || x > hi)
+    bad_value(key, text, "is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return x;
+}
+
+float parse_float(const std::string& key, const std::string& text, double lo, double hi) {
+  const std::string v = trim(text);
+  size_t used = 0;
+  double x = 0;
+  try {
+    x = std::stod(v, &used);
+  } catch (const std::exception&) {
+    bad_value(key, text, "is not a number");
+  }
+  if (used != v.size()) bad_value(key, text, "is not a number");
+  if (!std::isfinite(x)) bad_value(key, text, "is not finite");
+  std::ostringstream range;
+  range << "is out of range [" << lo << ", " << hi << "]";
+  if (x < lo || x > hi) bad_value(key, text, range.str());
+  return static_cast<float>(x);
+}
+
+bool parse_bool(const std::string& key, const std::string& text) {
+  const std::string v = trim(text);
+  if (v == "1" || v == "true" || v == "on" || v == "yes") return true;
+  if (v == "0" || v == "false" || v == "off" || v == "no") return false;
+  bad_value(key, text, "is not a boolean (true/false, on/off, 1/0)");
+}
+
+std::string fmt(float x) {
+  std::ostringstream s;
+  s.precision(std::numeric_limits<float>::max_digits10);
+  s << x;
+  return s.str();
+}
+
+// Table builders: a member (reached through `field`) and its admissible range.
+template <class F>
+ConfigOption int_option(std::string key, std::string help, long lo, long hi, F field) {
+  return {key, std::move(help),
+          [field](const TrainConfig& c) { return std::to_string(field(const_cast<TrainConfig&>(c))); },
+          [field, key, lo, hi](TrainConfig& c, const std::string& v) {
+            field(c) = static_cast<std::remove_reference_t<decltype(field(c))>>(parse_int(key, v, lo, hi));
+          }};
+}
+
+template <class F>
+ConfigOption float_option(std::string key, std::string help, double lo, double hi, F field) {
+  return {key, std::move(help),
+          [field](const TrainConfig& c) { return fmt(field(const_cast<TrainConfig&>(c))); },
+          [field, key, lo, hi](TrainConfig& c, const std::string& v) { field(c) = parse_float(key, v, lo, hi); }};
+}
+
+template <class F>
+ConfigOption bool_option(std::string key, std::string help, F field) {
+  return {key, std::move(help),
+          [field](const TrainConfig& c) { return std::string(field(const_cast<TrainConfig&>(c)) ? "true" : "false"); },
+          [field, key](TrainConfig& c, const std::string& v) { field(c) = parse_bool(key, v); }};
+}
+
+std::vector<ConfigOption> make_options() {
+  constexpr long kBig = 100000000;
+  std::vector<ConfigOption> o;
+  o.push_back({"preset", "configuration the other values start from: quick (2-core CPU) or reference (the paper's, a GPU job)",
+               [](const TrainConfig& c) { return c.preset; },
+               [](TrainConfig& c, const std::string& v) { c = preset_config(trim(v)); }});
+  o.push_back(int_option("depth", "trunk layers of every NeRF", 1, 32, [](TrainConfig& c) -> int& { return c.field.depth; }));
+  o.push_back(int_option("width", "trunk width of every NeRF", 1, 4096, [](TrainConfig& c) -> int& { return c.field.width; }));
+  o.push_back(int_option("skip", "0-based trunk layer whose output gets the encoded input re-fed (-1: none)", -1, 31,
+                         [](TrainConfig& c) -> int& { return c.field.skip; }));
+  o.push_back(int_option("pos-freqs", "positional-encoding frequencies of xyz (and t)", 0, 24,
+                         [](TrainConfig& c) -> int& { return c.field.pos_freqs; }));
+  o.push_back(int_option("dir-freqs", "positional-encoding frequencies of the view direction", 0, 24,
+                         [](TrainConfig& c) -> int& { return c.field.dir_freqs; }));
+  o.push_back(bool_option("view-dirs", "static colour depends on the view direction",
+                          [](TrainConfig& c) -> bool& { return c.field.view_dirs; }));
+  o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,
+                         [](TrainConfig& c) -> int& { return c.rays; }));
+  o.push_back(int_option("samples", "stratified samples per ray", 2, 1024, [](TrainConfig& c) -> int& { return c.samples; }));
+  o.push_back(float_option("noise-std", "std of the density noise while training", 0.0, 1e3,
+                           [](TrainConfig& c) -> float& { return c.noise_std; }));
+  o.push_back(int_option("pretrain-steps", "steps of the static NeRF alone on background pixels", 0, kBig,
+                         [](TrainConfig& c) -> int& { return c.pretrain_steps; }));
+  o.push_back(int_option("steps", "steps of joint training (all NeRFs, all losses)", 0, kBig,
+                         [](TrainConfig& c) -> int& { return c.steps; }));
+  o.push_back(float_option("lr", "Adam learning rate at the start of each phase", 1e-8, 1.0,
+                           [](TrainConfig& c) -> float& { return c.lr; }));
+  o.push_back(float_option("lr-decay", "factor the learning rate decays by over lr-decay-steps", 1e-6, 1.0,
+                           [](TrainConfig& c) -> float& { return c.lr_decay; }));
+  o.push_back(int_option("lr-decay-steps", "steps over which the learning rate falls by lr-decay", 1, kBig,
+                         [](TrainConfig& c) -> int& { return c.lr_decay_steps; }));
+  o.push_back(bool_option("augment", "novel-view augmentation of the object cameras",
+                          [](TrainConfig& c) -> bool& { return c.augment; }));
+  o.push_back(int_option("augment-every", "every n-th joint step is augmented", 1, kBig,
+                         [](TrainConfig& c) -> int& { return c.augment_every; }));
+  o.push_back(int_option("augment-start", "joint steps before the first augmented one", 0, kBig,
+                         [](TrainConfig& c) -> int& { return c.augment_start; }));
+  o.push_back(float_option("augment-degrees", "largest rotation of an object camera (about its x or y axis)", 0.0, 90.0,
+                           [](TrainConfig& c) -> float& { return c.augment_degrees; }));
+  o.push_back(float_option("w-full-rgb", "weight of the composite RGB loss", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.weights.full_rgb; }));
+  o.push_back(float_option("w-nerf-rgb", "weight of the per-NeRF masked RGB loss", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.weights.nerf_rgb; }));
+  o.push_back(float_option("w-mask", "weight of the per-NeRF mask loss", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.weights.mask; }));
+  o.push_back(float_option("w-blending", "weight of the blending loss (betas sum to 1)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.weights.blending; }));
+  o.push_back(float_option("w-alpha", "weight of the alpha loss (no object density outside its mask)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.weights.alpha; }));
+  o.push_back(int_option("factor", "image downscale factor when loading the scene (0: the reader's default)", 0, 64,
+                         [](TrainConfig& c) -> int& { return c.factor; }));
+  o.push_back(int_option("holdout", "hold every n-th frame out of training for evaluation (0: none)", 0, 1000000,
+                         [](TrainConfig& c) -> int& { return c.holdout; }));
+  o.push_back(int_option("seed", "seed of the initial weights, pixel batches, jitter and augmentation", 0, 4294967295L,
+                         [](TrainConfig& c) -> unsigned& { return c.seed; }));
+  o.push_back(int_option("checkpoint-every", "steps between checkpoints (one is always written at the end)", 1, kBig,
+                         [](TrainConfig& c) -> int& { return c.checkpoint_every; }));
+  o.push_back(int_option("log-every", "steps between progress lines and metrics records", 1, kBig,
+                         [](TrainConfig& c) -> int& { return c.log_every; }));
+  return o;
+}
+
+}  // namespace
+
+std::vector<std::string> preset_names() { return {"quick", "reference"}; }
+
+TrainConfig preset_config(const std::string& name) {
+  TrainConfig c;  // the defaults are the reference
+  if (name == "reference") {
+    c.preset = "reference";
+    return c;
+  }
+  if (name != "quick") throw Error("option 'preset': '" + name + "' is not one of quick, reference");
+  c.preset = "quick";
+  c.field.depth = 4;
+  c.field.width = 64;
+  c.field.skip = 2;
+  c.field.pos_freqs = 8;
+  c.rays = 256;
+  c.samples = 32;
+  c.pretrain_steps = 500;
+  c.steps = 2500;
+  c.lr = 2e-3f;
+  c.lr_decay_steps = 3000;
+  c.augment_start = 200;
+  c.checkpoint_every = 250;
+  c.log_every = 25;
+  return c;
+}
+
+const std::vector<ConfigOption>& config_options() {
+  static const std::vector<ConfigOption> options = make_options();
+  return options;
+}
+
+void set_config_value(TrainConfig& c, const std::string& key, const std::string& value) {
+  for (const ConfigOption& o : config_options())
+    if (o.key == key) return o.set(c, value);
+  throw Error("unknown option '" + key + "'");
+}
+
+void validate(const TrainConfig& c) {
+  if (c.field.skip >= c.field.depth)
+    throw Error("option 'skip': " + std::to_string(c.field.skip) + " must be below depth " +
+                std::to_string(c.field.depth));
+  const NovelViewLossWeights& w = c.weights;
+  if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha <= 0)
+    throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");
+  if (c.pretrain_steps + static_cast<long>(c.steps) <= 0)
+    throw Error("options 'pretrain-steps' and 'steps': both are 0, nothing to train");
+}
+
+std::string format_config(const TrainConfig& c, const std::vector<std::string>& extra) {
+  std::ostringstream s;
+  s << "# nova train configuration (key = value; every key is a `nova train` option)\n";
+  for (const ConfigOption& o : config_options()) s << "# " << o.help << "\n" << o.key << " = " << o.get(c) << "\n";
+  for (const std::string& line : extra) s << line << "\n";
+  return s.str();
+}
+
+TrainConfig parse_config_text(const std::string& text, const std::string& origin,
+                              std::vector<std::pair<std::string, std::string>>* others) {
+  std::vector<std::pair<std::string, std::string>> entries;
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::string t = trim(line.substr(0, line.find('#')));
+    if (t.empty()) continue;
+    const size_t eq = t.find('=');
+    if (eq == std::string::npos)
+      throw Error(origin + ":" + std::to_string(number) + ": expected 'key = value', got '" + t + "'");
+    entries.emplace_back(trim(t.substr(0, eq)), trim(t.substr(eq + 1)));
+  }
+  TrainConfig c = preset_config("quick");
+  for (const auto& [k, v] : entries)  // the preset first: every other key overrides it
+    if (k == "preset") c = preset_config(v);
+  for (const auto& [k, v] : entries) {
+    if (k == "preset") continue;
+    bool known = false;
+    for (const ConfigOption& o : config_options())
+      if (o.key == k) {
+        try {
+          o.set(c, v);
+        } catch (const Error& e) {
+          throw Error(origin + ": " + e.what());
+        }
+        known = true;
+      }
+    if (!known) {
+      if (!others) throw Error(origin + ": unknown option '" + k + "'");
+      others->emplace_back(k, v);
+    }
+  }
+  return c;
+}
+
+void hold_out_frames(Scene& scene, int every) {
+  if (every <= 0) return;
+  if (scene.frames.size() < 2)
+    throw Error("option 'holdout': scene '" + scene.name + "' has too few frames to hold any out");
+  std::vector<Frame> kept;
+  for (size_t i = 0; i < scene.frames.size(); ++i) {
+    Frame& f = scene.frames[i];
+    if (i % static_cast<size_t>(every) != 0) {
+      kept.push_back(std::move(f));
+      continue;
+    }
+    GroundTruthView v;
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%03zu", i);
+    v.name = name;
+    v.kind = "heldout";
+    v.time_index = static_cast<int>(i);
+    v.time = f.time;
+    v.camera = f.camera;
+    v.rgb = std::move(f.rgb);
+    scene.gt_views.push_back(std::move(v));
+  }
+  scene.frames = std::move(kept);
+  scene.notes.push_back("held out every " + std::to_string(every) + "th frame (" +
+                        std::to_string(scene.gt_views.size()) + " views) for evaluation");
+}
+
+std::string network_fingerprint(const TrainConfig& c) {
+  std::ostringstream s;
+  s << "depth=" << c.field.depth << " width=" << c.field.width << " skip=" << c.field.skip
+    << " pos-freqs=" << c.field.pos_freqs << " dir-freqs=" << c.field.dir_freqs
+    << " view-dirs=" << c.field.view_dirs;
+  return s.str();
+}
+
+}  // namespace nova

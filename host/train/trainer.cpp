@@ -1,0 +1,292 @@
+#include "nova/trainer.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <optional>
+#include <sstream>
+
+#include "nova/augment.hpp"
+#include "nova/error.hpp"
+#include "nova/pixel_batch.hpp"
+#include "nova/rays.hpp"
+
+namespace nova {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kFormat = "nova-run-checkpoint 1";
+
+std::string json_number(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(7) << v;
+  return s.str();
+}
+
+// Keeps the metrics records of steps <= `step` (a resumed run continues the same file).
+void truncate_metrics(const std::string& path, long step) {
+  std::ifstream in(path);
+  if (!in) return;
+  std::string line, kept;
+  while (std::getline(in, line)) {
+    const size_t at = line.find("\"step\":");
+    if (at != std::string::npos && std::stol(line.substr(at + 7)) <= step) kept += line + "\n";
+  }
+  in.close();
+  std::ofstream(path, std::ios::trunc) << kept;
+}
+
+void write_text_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << text;
+    if (!out.flush()) throw Error("cannot write '" + tmp + "'");
+  }
+  fs::rename(tmp, path);
+}
+
+}  // namespace
+
+Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std::string run_dir)
+    : rt_(rt), scene_(scene), config_(config), run_dir_(std::move(run_dir)),
+      geometry_(ray_geometry(scene)), rng_(config.seed) {
+  validate(config_);
+  if (scene.frames.empty()) throw Error("scene '" + scene.source + "' has no frames");
+  std::error_code ec;
+  fs::create_directories(run_dir_, ec);
+  if (ec) throw Error("cannot create run folder '" + run_dir_ + "': " + ec.message());
+  regions_.reserve(scene.frames.size());
+  for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
+  write_text_atomic(run_dir_ + "/" + kConfigFile,
+                    format_config(config_, {"# the scene this run trained on", "scene = " + scene.source}));
+}
+
+Trainer::~Trainer() = default;
+
+long Trainer::total_steps() const {
+  return static_cast<long>(config_.pretrain_steps) + static_cast<long>(config_.steps);
+}
+
+bool Trainer::joint_phase(long step) const {
+  return geometry_.num_objects > 0 && step >= config_.pretrain_steps;
+}
+
+// Builds the graph of the current step's phase; on entering the joint phase the static
+// NeRF's weights move over from pretraining and a fresh Adam starts (the phases have
+// their own optimisers, as the reference's pretraining).
+void Trainer::ensure_phase() {
+  const bool joint = joint_phase(step_);
+  if (exec_ && graph_joint_ == joint) return;
+  std::unique_ptr<StepGraph> g = joint ? build_joint_graph(config_, geometry_)
+                                       : build_pretrain_graph(config_, geometry_);
+  ExecutorOptions eo;
+  eo.seed = config_.seed;
+  eo.profile = profile_;
+  auto e = std::make_unique<Executor>(rt_, g->graph, eo);
+  if (exec_) {
+    for (Tensor p : g->graph.parameters()) {
+      const std::string& name = p.info().name;
+      if (name.rfind(kStaticPrefix, 0) != 0) continue;
+      for (Tensor q : graph_->graph.parameters())
+        if (q.info().name == name) e->set(p, exec_->get(q));
+    }
+  }
+  exec_.reset();
+  graph_ = std::move(g);
+  exec_ = std::move(e);
+  adam_ = std::make_unique<Adam>(rt_, exec_->parameter_floats());
+  graph_joint_ = joint;
+}
+
+void Trainer::train_step(bool log, TrainProgress& p) {
+  ensure_phase();
+  const TrainConfig& c = config_;
+  const bool joint = graph_joint_;
+  const long phase_step = joint ? step_ - c.pretrain_steps : step_;
+  const size_t F = scene_.frames.size();
+  const size_t R = static_cast<size_t>(c.rays), S = static_cast<size_t>(c.samples);
+  const int N = graph_->nerfs;
+
+  size_t fi = static_cast<size_t>(uniform01(rng_) * static_cast<float>(F)) % F;
+  // Pretraining only sees background pixels: skip frames that have none.
+  if (!joint)
+    for (size_t tries = 0; regions_[fi][0].empty() && tries < F; ++tries) fi = (fi + 1) % F;
+  const Frame& frame = scene_.frames[fi];
+
+  bool augmented = joint && c.augment && phase_step >= c.augment_start &&
+                         (phase_step - c.augment_start) % c.augment_every == 0;
+  PixelBatch batch;
+  std::vector<Camera> cameras(static_cast<size_t>(N), frame.camera);
+  bool drawn = false;
+  // Two objects turned in opposite directions can leave no pixel that both warps cover
+  // (a 20 degree turn shifts a 160 px wide image by ~64 px): draw new turns a few times,
+  // then fall back to the original view.
+  for (int attempt = 0; augmented && !drawn && attempt < 4; ++attempt) {
+    std::vector<std::optional<CameraRotation>> rot;
+    for (int k = 0; k < scene_.num_objects; ++k) rot.push_back(random_rotation(rng_, c.augment_degrees));
+    AugmentedFrame af = augment_frame(frame, rot);
+    Image8 valid = af.valid[0];
+    for (size_t k = 1; k < af.valid.size(); ++k)
+      for (size_t i = 0; i < valid.data.size(); ++i) valid.data[i] = std::min(valid.data[i], af.valid[k].data[i]);
+    const auto regions = pixel_regions(af.masks, &valid);
+    size_t usable = 0;
+    for (const auto& r : regions) usable += r.size();
+    if (usable < static_cast<size_t>(c.rays) / 4) continue;
+    batch = draw_pixels(af.rgb, af.masks, regions, c.rays, rng_);
+    cameras = af.cameras;
+    drawn = true;
+  }
+  if (!drawn && joint) {
+    augmented = false;
+    batch = draw_pixels(frame.rgb, frame.masks, regions_[fi], c.rays, rng_);
+  } else if (!drawn) {
+    const auto& r = regions_[fi];
+    std::vector<std::vector<uint32_t>> background_only(r.size());
+    background_only[0] = r[0];
+    batch = draw_pixels(frame.rgb, frame.masks, background_only, c.rays, rng_);
+  }
+
+  std::vector<float> jitter(R * S);
+  for (float& v : jitter) v = uniform01(rng_);
+  exec_->set(graph_->pixels, batch.pixels);
+  exec_->set(graph_->cameras, camera_rows(cameras));
+  exec_->set(graph_->jitter, jitter);
+  exec_->set(graph_->target_rgb, batch.rgb);
+  if (graph_->noise.valid()) {
+    std::vector<float> noise(static_cast<size_t>(N) * R * S);
+    for (float& v : noise) v = c.noise_std * standard_normal(rng_);
+    exec_->set(graph_->noise, noise);
+  }
+  if (joint) {
+    exec_->set(graph_->target_masks, batch.masks);
+    exec_->set(graph_->times, std::vector<float>(static_cast<size_t>(scene_.num_objects) * R * S,
+                                                 static_cast<float>(frame.time)));
+  }
+  exec_->forward();
+  exec_->backward();
+  const float lr = c.lr * static_cast<float>(std::pow(c.lr_decay, static_cast<double>(phase_step) / c.lr_decay_steps));
+  adam_->step(exec_->parameter_arena(), exec_->gradient_arena(), lr);
+  ++step_;
+
+  if (log) {
+    p.phase = joint ? "joint" : "pretrain";
+    p.loss = exec_->loss();
+    p.lr = lr;
+    p.augmented = augmented;
+    p.terms.clear();
+    for (auto& [name, t] : graph_->terms) p.terms.emplace_back(name, exec_->get(t).at(0));
+    const double m = exec_->get(graph_->psnr_mse).at(0);
+    p.psnr = m > 0 ? -10.0 * std::log10(m) : 99.0;
+  }
+}
+
+void Trainer::run(const std::function<void(const TrainProgress&)>& progress, long until_step) {
+  const long total = total_steps();
+  const long end = until_step < 0 ? total : std::min(until_step, total);
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  auto window_start = start;
+  long window_steps = 0;
+  double pretrain_step_s = 0, joint_step_s = 0;  // recent seconds per step, for the ETA
+  std::ofstream metrics(run_dir_ + "/" + kMetricsFile, std::ios::app);
+  if (!metrics) throw Error("cannot write '" + run_dir_ + "/" + kMetricsFile + "'");
+  while (step_ < end) {
+    const bool log = (step_ + 1) % config_.log_every == 0 || step_ + 1 == end;
+    TrainProgress p;
+    train_step(log, p);
+    ++window_steps;
+    if (log) {
+      rt_.finish();
+      const auto now = clock::now();
+      const double window = std::chrono::duration<double>(now - window_start).count();
+      const double per_step = window / static_cast<double>(window_steps);
+      (p.phase == "joint" ? joint_step_s : pretrain_step_s) = per_step;
+      const long pretrain_left = std::max(0L, config_.pretrain_steps - step_);
+      const long joint_left = end - step_ - std::min(pretrain_left, end - step_);
+      const double joint_estimate = joint_step_s > 0 ? joint_step_s : pretrain_step_s * (1 + geometry_.num_objects);
+      p.step = step_;
+      p.total = total;
+      p.rays_per_s = config_.rays / per_step;
+      p.seconds = std::chrono::duration<double>(now - start).count();
+      p.eta_seconds = std::min(pretrain_left, end - step_) * pretrain_step_s + joint_left * joint_estimate;
+      metrics << "{\"step\":" << p.step << ",\"phase\":\"" << p.phase << "\",\"loss\":" << json_number(p.loss);
+      for (auto& [name, v] : p.terms) metrics << ",\"" << name << "\":" << json_number(v);
+      metrics << ",\"psnr\":" << json_number(p.psnr) << ",\"lr\":" << json_number(p.lr)
+              << ",\"augmented\":" << (p.augmented ? "true" : "false")
+              << ",\"rays_per_s\":" << json_number(p.rays_per_s) << ",\"seconds\":" << json_number(p.seconds)
+              << "}\n";
+      metrics.flush();
+      if (!std::isfinite(p.loss))
+        throw Error("training diverged at step " + std::to_string(p.step) + ": loss is " + json_number(p.loss) +
+                        " (try a lower --lr); the last checkpoint is kept",
+                    kExitInternal);
+      if (progress) progress(p);
+      window_start = now;
+      window_steps = 0;
+    }
+    if (step_ % config_.checkpoint_every == 0 || step_ == end) write_checkpoint_now();
+  }
+}
+
+Checkpoint Trainer::checkpoint() {
+  ensure_phase();
+  Checkpoint ck;
+  ck.meta["format"] = kFormat;
+  ck.meta["networks"] = network_fingerprint(config_);
+  ck.meta["objects"] = std::to_string(scene_.num_objects);
+  ck.meta["phase"] = graph_joint_ ? "joint" : "pretrain";
+  ck.meta["step"] = std::to_string(step_);
+  ck.meta["rng"] = rng_state(rng_);
+  ck.meta["adam_steps"] = std::to_string(adam_->steps());
+  ck.meta["config"] = format_config(config_);
+  for (Tensor p : graph_->graph.parameters())
+    ck.arrays.push_back({p.info().name, p.shape().dims, exec_->get(p)});
+  const size_t n = adam_->count();
+  ck.arrays.push_back({"adam.m", {n}, rt_.download_floats(adam_->first_moment(), n)});
+  ck.arrays.push_back({"adam.v", {n}, rt_.download_floats(adam_->second_moment(), n)});
+  return ck;
+}
+
+void Trainer::write_checkpoint_now() { write_checkpoint(run_dir_ + "/" + kCheckpointFile, checkpoint()); }
+
+void Trainer::resume() {
+  const std::string path = run_dir_ + "/" + kCheckpointFile;
+  Checkpoint ck = read_checkpoint(path);
+  const auto mismatch = [&](const std::string& what) {
+    return Error("checkpoint '" + path + "' does not fit this run: " + what);
+  };
+  if (ck.get("format") != kFormat) throw mismatch("format '" + ck.get("format") + "'");
+  if (ck.get("networks") != network_fingerprint(config_))
+    throw mismatch("written for networks '" + ck.get("networks") + "', configured '" + network_fingerprint(config_) + "'");
+  if (ck.get("objects") != std::to_string(scene_.num_objects))
+    throw mismatch(ck.get("objects") + " objects in the checkpoint, " + std::to_string(scene_.num_objects) + " in the scene");
+  step_ = std::stol(ck.get("step"));
+  if (step_ > total_steps())
+    throw mismatch("it is at step " + std::to_string(step_) + ", beyond the configured " + std::to_string(total_steps()));
+  exec_.reset();
+  ensure_phase();
+  if (ck.get("phase") != (graph_joint_ ? "joint" : "pretrain"))
+    throw mismatch("phase '" + ck.get("phase") + "' at step " + std::to_string(step_) +
+                   " (pretrain-steps changed?)");
+  for (Tensor p : graph_->graph.parameters()) {
+    const CheckpointArray& a = ck.array(p.info().name);
+    if (a.shape != p.shape().dims) throw mismatch("parameter '" + a.name + "' has another shape");
+    exec_->set(p, a.values);
+  }
+  const CheckpointArray& m = ck.array("adam.m");
+  const CheckpointArray& v = ck.array("adam.v");
+  if (m.values.size() != adam_->count() || v.values.size() != adam_->count())
+    throw mismatch("optimiser state has " + std::to_string(m.values.size()) + " values, expected " +
+                   std::to_string(adam_->count()));
+  rt_.upload(adam_->first_moment(), m.values.data(), m.values.size() * sizeof(float));
+  rt_.upload(adam_->second_moment(), v.values.data(), v.values.size() * sizeof(float));
+  adam_->set_steps(std::stol(ck.get("adam_steps")));
+  set_rng_state(rng_, ck.get("rng"));
+  truncate_metrics(run_dir_ + "/" + kMetricsFile, step_);
+}
+
+}  // namespace nova

@@ -1,0 +1,38 @@
+#pragma once
+// The two NeRF fields of NOVA as graph builders: the static background NeRF and the
+// time-conditioned object NeRFs (one per object, run together as batched GEMMs). Both emit
+// the raw rows render_composite reads: [rgb(3), sigma, blend], pre-activation.
+//
+//   static:  [PE_L(xyz)] -> trunk (depth x width, input re-fed after layer `skip`) -> feature
+//            feature -> sigma, blend;  [feature, PE_Ld(viewdir)] -> width/2 ReLU -> rgb
+//            (with view_dirs off the rgb head reads the feature alone)
+//   object:  [PE_L(xyzt)] -> trunk -> rgb, sigma, blend (view-independent, as the reference's
+//            dynamic NeRF)
+// Parameter names: "static.*" and "objects.*"; object parameters carry a leading object
+// dimension [K, ...] when K > 1, so one object's weights are a slice of them.
+#include <string>
+#include "nova/graph.hpp"
+
+namespace nova {
+
+struct FieldConfig {
+  int depth = 8;
+  int width = 256;
+  int skip = 4;        // 0-based trunk layer whose output gets the encoded input appended
+  int pos_freqs = 10;  // L of the positional encoding of xyz (and t for objects)
+  int dir_freqs = 4;   // L of the view-direction encoding
+  bool view_dirs = true;  // static colour depends on the view direction
+};
+
+// positions [M, 3], viewdirs [M, 3] (unused without view_dirs) -> raw [M, 5].
+Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& config);
+
+// positions [B, M, 3] (or [M, 3] for B = 1), times of the same shape with 1 column -> raw
+// [B, M, 5] (or [M, 5]). B object networks with independent weights.
+Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& config);
+
+// Parameter name prefixes, for checkpoints and the inference renderer.
+inline const std::string kStaticPrefix = "static.";
+inline const std::string kObjectPrefix = "objects.";
+
+}  // namespace nova

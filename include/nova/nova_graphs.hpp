@@ -1,0 +1,55 @@
+#pragma once
+// The graphs of a NOVA model: the static pretraining step, the joint training step and the
+// inference render of a view with placed object instances. The trainer and the renderer
+// both build from here, so training and inference see the same fields and the same rays.
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "nova/graph.hpp"
+#include "nova/losses.hpp"
+#include "nova/render.hpp"
+#include "nova/scene.hpp"
+#include "nova/train_config.hpp"
+
+namespace nova {
+
+// What the graphs need to know of the scene: how rays are parameterised and sampled.
+struct RayGeometry {
+  bool ndc = false;
+  float near = 0.0f, far = 1.0f;  // sample range (NDC: 0 and 1)
+  float ax = -1.0f, ay = -1.0f;   // NDC constants -fx/cx, -fy/cy of the training cameras
+  int num_objects = 0;
+};
+RayGeometry ray_geometry(const Scene& scene);
+
+struct StepGraph {
+  Graph graph;
+  int nerfs = 1;  // 1 (pretraining) or 1 + K
+  // Data inputs, set every step (invalid when the graph has none).
+  Tensor pixels, cameras, jitter, noise, times, target_rgb, target_masks;
+  Tensor loss;
+  std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
+  Tensor psnr_mse;  // the composite-colour mse the progress PSNR is computed from
+};
+
+// The static NeRF alone on `rays` rays (background pixels): mse of its colour.
+std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& g);
+// All 1 + K NeRFs with the novel-view losses of c.weights (K >= 1).
+std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeometry& g);
+
+struct ViewGraph {
+  Graph graph;
+  int rays = 0, instances = 0;
+  bool background = true;
+  Tensor pixels, cameras, transforms, times;  // cameras: [N, 16], the view's camera N times
+  RenderOutputs out;
+};
+// Inference: `rays` rays of one camera, the static NeRF when `background`, and `instances`
+// object-NeRF copies each placed by a world-to-object transform at its own time.
+std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& f, int samples, const RayGeometry& g,
+                                            int rays, bool background, int instances,
+                                            bool hard_blend);
+
+}  // namespace nova

@@ -1,0 +1,79 @@
+#pragma once
+// Everything `nova train` can be told, as one struct with one option table: the CLI builds
+// its --help and parsing from the table, runs write it as RUN/config.ini, and render/eval
+// read it back. Two shipped presets: "quick" (the default, sized for a 2-core CPU) and
+// "reference" (the paper's networks and schedule; a GPU job).
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "nova/losses.hpp"
+#include "nova/nova_fields.hpp"
+#include "nova/scene.hpp"
+
+namespace nova {
+
+struct TrainConfig {
+  std::string preset = "quick";
+  FieldConfig field;
+  // Rays and samples.
+  int rays = 1024;          // rays per step (split over background and objects)
+  int samples = 64;         // stratified samples per ray
+  float noise_std = 1.0f;   // density noise while training
+  // Schedule.
+  int pretrain_steps = 100000;  // static NeRF alone, background pixels
+  int steps = 300000;           // joint training
+  float lr = 5e-4f;
+  float lr_decay = 0.1f;          // lr(s) = lr * lr_decay^(s / lr_decay_steps), s per phase
+  int lr_decay_steps = 300000;
+  // Novel-view augmentation.
+  bool augment = true;
+  int augment_every = 3;         // every n-th joint step is augmented
+  int augment_start = 0;         // joint steps before the first augmented one (warm-up)
+  float augment_degrees = 20.0f;
+  NovelViewLossWeights weights;
+  // Scene loading.
+  int factor = 0;   // image downscale (0: the reader's default)
+  int holdout = 0;  // every n-th frame is held out for evaluation (0: none; LLFF uses 8)
+  // Run.
+  unsigned seed = 1;
+  int checkpoint_every = 1000;
+  int log_every = 50;
+};
+
+TrainConfig preset_config(const std::string& name);  // "quick" or "reference"; Error otherwise
+std::vector<std::string> preset_names();
+
+// One entry of the option table: how to read, write and check one field.
+struct ConfigOption {
+  std::string key;
+  std::string help;
+  std::function<std::string(const TrainConfig&)> get;
+  std::function<void(TrainConfig&, const std::string&)> set;  // parses; Error on a bad value
+};
+const std::vector<ConfigOption>& config_options();
+
+// Sets `key` from text; nova::Error (exit 2) names the key and the value when it is unknown,
+// malformed or out of range.
+void set_config_value(TrainConfig& c, const std::string& key, const std::string& value);
+// Checks the combination (sizes positive, skip < depth, ...); Error on the first problem.
+void validate(const TrainConfig& c);
+
+// "key = value" lines with the help as comments (readable by Boost's config-file parser and
+// by read_config_text). `extra` lines (e.g. "scene = DIR") are appended as they are.
+std::string format_config(const TrainConfig& c, const std::vector<std::string>& extra = {});
+// Parses format_config's text: starts from the preset named in it (quick if none), applies
+// every known key; unknown keys are returned in `others` (key -> value) when given, else an
+// Error. `origin` names the file in errors.
+TrainConfig parse_config_text(const std::string& text, const std::string& origin,
+                              std::vector<std::pair<std::string, std::string>>* others = nullptr);
+
+// Moves frames 0, n, 2n, ... of `scene` out of training into its ground-truth views (kind
+// "heldout", named frame_III), the LLFF evaluation protocol.
+void hold_out_frames(Scene& scene, int every);
+
+// The parameters that fix the networks' shapes: a checkpoint written under one
+// fingerprint cannot be loaded under another.
+std::string network_fingerprint(const TrainConfig& c);
+
+}  // namespace nova

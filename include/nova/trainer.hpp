@@ -1,0 +1,81 @@
+#pragma once
+// Training a NOVA scene headless: static pretraining on background pixels, then joint
+// training of the static and the object NeRFs with novel-view augmentation. Writes into a
+// run folder: config.ini (the effective configuration), metrics.jsonl (one record per
+// logged step) and checkpoint.bin (atomic; weights, Adam moments, step and random state,
+// so that a resumed run continues bit for bit as if it had not stopped).
+#include <functional>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "nova/checkpoint.hpp"
+#include "nova/executor.hpp"
+#include "nova/nova_graphs.hpp"
+#include "nova/optim.hpp"
+#include "nova/runtime.hpp"
+#include "nova/scene.hpp"
+#include "nova/train_config.hpp"
+
+namespace nova {
+
+struct TrainProgress {
+  long step = 0, total = 0;  // steps done, steps of the whole run
+  std::string phase;         // "pretrain" or "joint"
+  double loss = 0, psnr = 0, lr = 0;
+  double rays_per_s = 0, seconds = 0, eta_seconds = 0;
+  std::vector<std::pair<std::string, double>> terms;
+  bool augmented = false;  // whether the logged step was an augmented one
+};
+
+inline const std::string kCheckpointFile = "checkpoint.bin";
+inline const std::string kConfigFile = "config.ini";
+inline const std::string kMetricsFile = "metrics.jsonl";
+
+class Trainer {
+ public:
+  // `scene` must outlive the trainer. The run folder is created when missing.
+  Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std::string run_dir);
+  ~Trainer();
+
+  // Restores RUN/checkpoint.bin: Error when it is missing, corrupt, or written for other
+  // networks or another number of objects.
+  void resume();
+  // Trains up to `until_step` (the configuration's total when < 0), logging every
+  // log_every steps and checkpointing every checkpoint_every steps and at the end.
+  void run(const std::function<void(const TrainProgress&)>& progress = {}, long until_step = -1);
+
+  // Time every op (the runtime must be created with profiling on); profile_table() then
+  // holds the joint (or, before it, the pretraining) graph's per-op times.
+  void set_profile(bool on) { profile_ = on; }
+  std::string profile_table() const { return exec_ ? exec_->profile_table() : std::string(); }
+
+  long step() const { return step_; }
+  long total_steps() const;
+  const std::string& run_dir() const { return run_dir_; }
+  // The current state as a checkpoint (what run() writes).
+  Checkpoint checkpoint();
+
+ private:
+  bool joint_phase(long step) const;
+  void ensure_phase();
+  void train_step(bool log, TrainProgress& p);
+  void write_checkpoint_now();
+
+  Runtime& rt_;
+  const Scene& scene_;
+  TrainConfig config_;
+  std::string run_dir_;
+  RayGeometry geometry_;
+  std::mt19937 rng_;
+  long step_ = 0;
+  std::unique_ptr<StepGraph> graph_;
+  std::unique_ptr<Executor> exec_;
+  std::unique_ptr<Adam> adam_;
+  bool graph_joint_ = false;
+  bool profile_ = false;
+  std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
+};
+
+}  // namespace nova

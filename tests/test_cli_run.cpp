@@ -1,0 +1,128 @@
+// `nova train`, `nova render` and `nova eval` as a user runs them on the tiny synthetic
+// scene: the files each promises, and exit code 2 with a message naming the problem (and
+// nothing left behind) for every bad input.
+#include <boost/test/unit_test.hpp>
+#include <cstdlib>
+#include <sys/wait.h>
+
+#include "scene_test_util.hpp"
+
+namespace nova::test {
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string err;
+};
+
+Result nova_cli(const std::string& args, const TempDir& dir) {
+  const std::string err = (dir / "stderr.txt").string();
+  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova " + args + " >/dev/null 2>" + err;
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = read_all(err);
+  return r;
+}
+
+// The smallest networks and schedule that exercise every phase (pretraining, joint,
+// augmented steps) in a few seconds.
+const std::string kTiny =
+    " --depth 2 --width 16 --skip -1 --pos-freqs 4 --dir-freqs 2 --rays 64 --samples 8"
+    " --pretrain-steps 3 --steps 6 --augment-start 0 --log-every 3 --checkpoint-every 4";
+
+bool has_cli() { return fs::exists(fs::path(NOVA_BINARY_DIR) / "nova"); }
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(cli_run)
+
+BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
+  if (!has_cli()) return;
+  TempDir dir("cli-run");
+  const std::string scene = cached_tiny_scene().string(), run = (dir / "run").string();
+  Result t = nova_cli("train --scene " + scene + " --out " + run + kTiny, dir);
+  BOOST_REQUIRE_MESSAGE(t.code == 0, t.err);
+  for (const char* f : {"config.ini", "metrics.jsonl", "checkpoint.bin"}) BOOST_TEST(fs::exists(dir / "run" / f), f);
+  BOOST_TEST(t.err.find("eta") != std::string::npos);  // the progress line
+  const std::string metrics = read_all(dir / "run" / "metrics.jsonl");
+  for (const char* key : {"\"step\":9", "\"psnr\":", "\"rays_per_s\":", "\"alpha\":", "\"blending\":"})
+    BOOST_TEST(metrics.find(key) != std::string::npos, key);
+
+  // Every frame time from camera 0: colour, depth and one mask per NeRF, and the video.
+  Result r = nova_cli("render --run " + run + " --out " + (dir / "frames").string() + " --video", dir);
+  BOOST_REQUIRE_MESSAGE(r.code == 0, r.err);
+  for (const char* f : {"000.png", "009.png", "000_depth.png", "000_mask0.png", "000_mask2.png", "video.mp4"})
+    BOOST_TEST(fs::exists(dir / "frames" / f), f);
+  BOOST_TEST(!fs::exists(dir / "frames.partial"));
+
+  // A composition of three instances (one object twice), from a spec the user wrote.
+  write_all(dir / "spec.txt",
+            "nova-compose 1\ntarget three camera=2\n"
+            "instance object=1 time=-1\ninstance object=1 time=0.2 translate=0.1,0,0\n"
+            "instance object=2 time=0 rotate=0,30,0\n");
+  Result c = nova_cli("render --run " + run + " --out " + (dir / "comp").string() + " --compose " +
+                          (dir / "spec.txt").string(), dir);
+  BOOST_REQUIRE_MESSAGE(c.code == 0, c.err);
+  for (const char* f : {"three.png", "three_depth.png", "three_mask0.png", "three_mask3.png"})
+    BOOST_TEST(fs::exists(dir / "comp" / f), f);
+
+  Result e = nova_cli("eval --run " + run, dir);
+  BOOST_REQUIRE_MESSAGE(e.code == 0, e.err);
+  const std::string json = read_all(dir / "run" / "eval.json");
+  for (const char* key : {"\"mean_psnr\"", "\"mean_ssim\"", "\"compose_mean_psnr\"", "cam0_000"})
+    BOOST_TEST(json.find(key) != std::string::npos, key);
+
+  // Resume continues the same run to a longer schedule.
+  Result more = nova_cli("train --scene " + scene + " --out " + run + " --resume --steps 9", dir);
+  BOOST_REQUIRE_MESSAGE(more.code == 0, more.err);
+  BOOST_TEST(more.err.find("resumed at step 9") != std::string::npos);
+}
+
+BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
+  if (!has_cli()) return;
+  TempDir dir("cli-bad");
+  const std::string scene = cached_tiny_scene().string();
+  const std::string out = (dir / "run").string();
+  const auto expect = [&](const std::string& args, const std::string& needle) {
+    Result r = nova_cli(args, dir);
+    BOOST_TEST(r.code == 2, args << " -> exit " << r.code << ": " << r.err);
+    BOOST_TEST(r.err.find(needle) != std::string::npos, args << ": '" << needle << "' not in: " << r.err);
+  };
+  expect("train --scene " + (dir / "nowhere").string() + " --out " + out + kTiny, "nowhere");
+  BOOST_TEST(!fs::exists(out));
+  expect("train --scene " + scene + " --out " + out + " --rays abc", "'rays'");
+  expect("train --scene " + scene + " --out " + out + " --samples 0", "out of range");
+  expect("train --scene " + scene + " --out " + out + " --preset huge", "'huge'");
+  expect("train --scene " + scene + " --out " + out + " --depth 2 --skip 4", "skip");
+  write_all(dir / "bad.ini", "rays = 64\nlr = fast\n");
+  expect("train --scene " + scene + " --out " + out + " --config " + (dir / "bad.ini").string(), "'lr'");
+  write_all(dir / "unknown.ini", "wings = 2\n");
+  expect("train --scene " + scene + " --out " + out + " --config " + (dir / "unknown.ini").string(), "wings");
+  BOOST_TEST(!fs::exists(out));
+  expect("train --scene " + scene + " --out " + out + " --resume" + kTiny, "checkpoint");
+
+  // A trained run for the render errors.
+  BOOST_REQUIRE(nova_cli("train --scene " + scene + " --out " + out + kTiny, dir).code == 0);
+  expect("train --scene " + scene + " --out " + out + kTiny, "already exists");
+  write_all(dir / "spec.txt", "nova-compose 1\ntarget t camera=0\ninstance object=7 time=0\n");
+  expect("render --run " + out + " --out " + (dir / "comp").string() + " --compose " + (dir / "spec.txt").string(),
+         "object 7");
+  BOOST_TEST(!fs::exists(dir / "comp"));
+  BOOST_TEST(!fs::exists(dir / "comp.partial"));
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --camera 99", "--camera 99");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --pose 1,2,3", "--pose");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --time 3", "--time");
+  expect("render --run " + (dir / "norun").string() + " --out " + (dir / "r").string(), "norun");
+  expect("eval --run " + out + " --views sideways", "sideways");
+  // A damaged checkpoint is named as such.
+  std::string bytes = read_all(fs::path(out) / "checkpoint.bin");
+  bytes[bytes.size() / 2] ^= 0x33;
+  write_all(fs::path(out) / "checkpoint.bin", bytes);
+  expect("render --run " + out + " --out " + (dir / "r").string(), "corrupt");
+  BOOST_TEST(!fs::exists(dir / "r"));
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+}  // namespace nova::test
