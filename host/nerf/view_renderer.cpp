@@ -77,12 +77,12 @@ ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeom
 
 ViewRenderer::~ViewRenderer() = default;
 
-ViewRenderer::Cached& ViewRenderer::graph_for(bool background, int instances, int rays) {
-  auto& slot = graphs_[{background, instances, rays}];
+ViewRenderer::Cached& ViewRenderer::graph_for(bool background, int instances, int rays, bool hard_blend) {
+  auto& slot = graphs_[{background, instances, rays, hard_blend}];
   if (!slot) {
     slot = std::make_unique<Cached>();
     slot->graph = build_view_graph(config_.field, config_.samples, geometry_, rays, background,
-                                   instances, true);
+                                   instances, hard_blend);
     slot->exec = std::make_unique<Executor>(rt_, slot->graph->graph);
     slot->loaded_objects.assign(static_cast<size_t>(instances), 0);
     for (Tensor p : slot->graph->graph.parameters())
@@ -108,7 +108,7 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
   const int pixels_in_view = req.camera.width * req.camera.height;
   if (pixels_in_view <= 0) throw Error("the camera has no pixels (" + std::to_string(req.camera.width) + "x" +
                                        std::to_string(req.camera.height) + ")");
-  Cached& c = graph_for(req.background, B, std::min(chunk_rays_, pixels_in_view));
+  Cached& c = graph_for(req.background, B, std::min(chunk_rays_, pixels_in_view), req.hard_blend);
   ViewGraph& vg = *c.graph;
   // Object weights for each instance slot: slice `object` of the trained [K, ...] arrays.
   std::vector<int> wanted;

@@ -168,10 +168,10 @@ TrainConfig preset_config(const std::string& name) {
   c.field.pos_freqs = 8;
   c.rays = 256;
   c.samples = 32;
-  c.pretrain_steps = 500;
-  c.steps = 2500;
+  c.pretrain_steps = 400;
+  c.steps = 2000;
   c.lr = 2e-3f;
-  c.lr_decay_steps = 3000;
+  c.lr_decay_steps = 2500;
   c.augment_start = 200;
   c.checkpoint_every = 250;
   c.log_every = 25;

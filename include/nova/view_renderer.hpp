@@ -64,7 +64,7 @@ class ViewRenderer {
 
  private:
   struct Cached;
-  Cached& graph_for(bool background, int instances, int rays);
+  Cached& graph_for(bool background, int instances, int rays, bool hard_blend);
 
   Runtime& rt_;
   TrainConfig config_;
@@ -72,7 +72,7 @@ class ViewRenderer {
   const Checkpoint& checkpoint_;
   bool has_objects_ = false;
   int chunk_rays_ = 0;
-  std::map<std::tuple<bool, int, int>, std::unique_ptr<Cached>> graphs_;
+  std::map<std::tuple<bool, int, int, bool>, std::unique_ptr<Cached>> graphs_;
 };
 
 }  // namespace nova
