@@ -32,7 +32,7 @@ Camera parse_pose(const std::string& text, Camera base) {
 }
 
 std::string frame_name(size_t i) {
-  char b[16];
+  char b[32];
   std::snprintf(b, sizeof b, "%03zu.png", i);
   return b;
 }
