@@ -71,8 +71,10 @@ long Trainer::total_steps() const {
   return static_cast<long>(config_.pretrain_steps) + static_cast<long>(config_.steps);
 }
 
+// A run without joint steps stays in pretraining to its end, so its last checkpoint holds
+// the static NeRF alone rather than untrained object NeRFs a renderer would draw.
 bool Trainer::joint_phase(long step) const {
-  return geometry_.num_objects > 0 && step >= config_.pretrain_steps;
+  return geometry_.num_objects > 0 && config_.steps > 0 && step >= config_.pretrain_steps;
 }
 
 // Builds the graph of the current step's phase; on entering the joint phase the static
