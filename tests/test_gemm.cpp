@@ -1,5 +1,6 @@
-// GEMM through the provider (CLBlast with the device's tuning) against a float64 host
-// reference, for the NeRF layer shapes and the transposed products the backward uses.
+// GEMM through both providers (CLBlast with the device's tuning, and nova's own kernels)
+// against a float64 host reference, for the NeRF layer shapes and the transposed products the
+// backward uses.
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 #include <limits>
@@ -20,8 +21,9 @@ struct Case {
 // |err| <= 2 k u sum_l |a_il b_lj| + u |c| with u = 2^-24 (Higham's worst-case bound for a
 // float32 dot product of length k, doubled for the beta term), so an indexing or layout bug,
 // which moves results by O(sum |a b|), cannot pass.
-void run_case(const Case& c, float beta) {
+void run_case_with(GemmProvider provider, const Case& c, float beta) {
   Runtime& rt = test::runtime();
+  set_gemm_provider(rt, provider);
   const size_t rows_a = c.ta ? c.k : c.m, cols_a = c.ta ? c.m : c.k;
   const size_t rows_b = c.tb ? c.n : c.k, cols_b = c.tb ? c.k : c.n;
   const size_t sa = rows_a * cols_a, sb = rows_b * cols_b, sc = c.m * c.n;
@@ -53,9 +55,17 @@ void run_case(const Case& c, float beta) {
         const double bound = 2 * c.k * u * mag + 2 * u * std::fabs(cprev) + 1e-30;
         worst = std::max(worst, std::fabs(out[p * sc + i * c.n + j] - ref) / bound);
       }
-  BOOST_TEST(worst <= 1.0, "m=" << c.m << " n=" << c.n << " k=" << c.k << " ta=" << c.ta
+  BOOST_TEST(worst <= 1.0, gemm_provider_name(provider) << " m=" << c.m << " n=" << c.n << " k=" << c.k << " ta=" << c.ta
                                 << " tb=" << c.tb << " batch=" << c.batch << " beta=" << beta
                                 << ": error/bound " << worst);
+}
+
+// Every case through each provider; the device's own choice is restored afterwards.
+void run_case(const Case& c, float beta) {
+  Runtime& rt = test::runtime();
+  const GemmProvider chosen = gemm_provider(rt);
+  for (GemmProvider p : {GemmProvider::CLBlast, GemmProvider::Kernels}) run_case_with(p, c, beta);
+  set_gemm_provider(rt, chosen);
 }
 
 }  // namespace
@@ -81,6 +91,16 @@ BOOST_AUTO_TEST_CASE(batched_networks) {
   run_case({false, false, 53, 32, 19, 3}, 0.0f);
   run_case({false, true, 53, 19, 32, 3}, 1.0f);
   run_case({true, false, 19, 32, 53, 3}, 0.0f);
+}
+
+BOOST_AUTO_TEST_CASE(small_and_ragged_shapes) {
+  // Fewer rows than one register block, a single column, k = 1, and both-transposed (which
+  // the own kernels hand to CLBlast).
+  run_case({false, false, 5, 1, 1, 1}, 0.0f);
+  run_case({false, false, 3, 7, 5, 2}, 1.0f);
+  run_case({true, false, 3, 9, 11, 2}, 1.0f);
+  run_case({false, true, 13, 3, 1, 1}, 0.0f);
+  run_case({true, true, 9, 5, 7, 1}, 0.0f);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

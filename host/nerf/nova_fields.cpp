@@ -22,7 +22,17 @@ MlpConfig trunk_config(const FieldConfig& c, int outputs, int networks) {
   return m;
 }
 
+// The encoded input of a trunk: positional encoding, or the hash grid `table_name`.
+Tensor encode(Tensor x, const FieldConfig& c, const std::string& table_name, int networks) {
+  if (c.encoding == Encoding::Frequency) return positional_encoding(x, c.pos_freqs);
+  return hash_encoding(x, hash_grid_table(*x.graph, table_name, c.hash, networks), c.hash);
+}
+
 }  // namespace
+
+const char* encoding_name(Encoding e) {
+  return e == Encoding::HashGrid ? "hashgrid" : "frequency";
+}
 
 Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& c) {
   if (positions.shape().rank() != 2 || positions.shape()[1] != 3)
@@ -30,8 +40,8 @@ Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& 
                 kExitInternal);
   // The trunk's output layer is the reference's feature_linear; sigma and blend are linear
   // heads on the feature (the same function class as heads on the last hidden layer).
-  Tensor feature = build_mlp(positional_encoding(positions, c.pos_freqs),
-                             trunk_config(c, c.width, 1), "static.trunk").output;
+  Tensor feature = build_mlp(encode(positions, c, "static.hash", 1), trunk_config(c, c.width, 1),
+                             "static.trunk").output;
   Tensor sigma_blend = dense_layer(feature, 2, Activation::Identity, "static.sigma_blend");
   Tensor colour_in = c.view_dirs ? concat({feature, positional_encoding(viewdirs, c.dir_freqs)})
                                  : feature;
@@ -53,7 +63,7 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c)
                 kExitInternal);
   const int networks = batched ? static_cast<int>(ps[0]) : 1;
   Tensor xyzt = concat({positions, times});
-  return build_mlp(positional_encoding(xyzt, c.pos_freqs), trunk_config(c, 5, networks),
+  return build_mlp(encode(xyzt, c, "objects.hash", networks), trunk_config(c, 5, networks),
                    "objects.trunk").output;
 }
 

@@ -1,5 +1,8 @@
 #include "nova/nova_graphs.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "nova/error.hpp"
 #include "nova/nova_fields.hpp"
 #include "nova/ops.hpp"
@@ -26,6 +29,8 @@ RayGeometry ray_geometry(const Scene& scene) {
   RayGeometry g;
   g.ndc = scene.ndc;
   g.num_objects = scene.num_objects;
+  g.disparity = std::all_of(scene.frames.begin(), scene.frames.end(),
+                            [](const Frame& f) { return !f.disparity.empty(); });
   if (scene.ndc) {
     const Camera& c = scene.frames.front().camera;
     g.near = 0.0f;
@@ -38,8 +43,39 @@ RayGeometry ray_geometry(const Scene& scene) {
                   std::to_string(scene.far) + "] are not a valid depth range");
     g.near = static_cast<float>(scene.near);
     g.far = static_cast<float>(scene.far);
+    double extent = 0;
+    for (const Frame& f : scene.frames)
+      for (int r = 0; r < 3; ++r) extent = std::max(extent, std::fabs(f.camera.position(r)));
+    g.extent = static_cast<float>(std::max(extent, 1e-3));
   }
   return g;
+}
+
+bool depth_term_active(const TrainConfig& c, const RayGeometry& g) {
+  return c.w_depth > 0.0f && g.disparity && g.ndc;
+}
+
+namespace {
+
+// Adds w_depth * depth_loss(depth, -disparity) to `loss` when the scene supports it.
+Tensor with_depth_term(StepGraph& s, const TrainConfig& c, const RayGeometry& geo, Tensor depth,
+                       Tensor loss) {
+  if (!depth_term_active(c, geo)) return loss;
+  Graph& g = s.graph;
+  const Shape rays{static_cast<size_t>(c.rays)};
+  s.target_depth = g.input("target_depth", rays);
+  s.depth_valid = g.input("depth_valid", rays);
+  Tensor d = depth_loss(depth, s.target_depth, s.depth_valid);
+  s.terms.emplace_back("depth", d);
+  return weighted_sum({loss, d}, {1.0f, c.w_depth});
+}
+
+}  // namespace
+
+FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g) {
+  FieldConfig out = f;
+  if (out.hash.bound <= 0.0f) out.hash.bound = g.extent;
+  return out;
 }
 
 std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& geo) {
@@ -54,12 +90,14 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1}));
-  Tensor raw = build_static_field(smp.positions[0], smp.viewdirs[0], c.field);
+  Tensor raw = build_static_field(smp.positions[0], smp.viewdirs[0], scene_field(c.field, geo));
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
-  s->loss = pretrain_rgb_loss(out.rgb, s->target_rgb);
-  s->psnr_mse = s->loss;
-  s->terms = {{"static_rgb", s->loss}};
+  Tensor rgb_loss = pretrain_rgb_loss(out.rgb, s->target_rgb);
+  s->psnr_mse = rgb_loss;
+  s->terms = {{"static_rgb", rgb_loss}};
+  s->loss = with_depth_term(*s, c, geo, out.depth, rgb_loss);
   g.set_loss(s->loss);
+  for (auto& [name, t] : s->terms) g.keep(t);
   return s;
 }
 
@@ -80,16 +118,17 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->target_masks = g.input("target_masks", Shape{N, R});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1, K}));
-  Tensor raw_static = build_static_field(smp.positions[0], smp.viewdirs[0], c.field);
-  Tensor raw_objects = build_object_fields(smp.positions[1], s->times, c.field);
+  const FieldConfig field = scene_field(c.field, geo);
+  Tensor raw_static = build_static_field(smp.positions[0], smp.viewdirs[0], field);
+  Tensor raw_objects = build_object_fields(smp.positions[1], s->times, field);
   Tensor raw = stack({raw_static, raw_objects});
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
   NovelViewLoss l = novel_view_loss(out, raw, smp.delta, s->noise,
                                     {s->target_rgb, s->target_masks}, c.weights);
-  s->loss = l.total;
   for (auto [name, t] : {std::pair<const char*, Tensor>{"full_rgb", l.full_rgb}, {"nerf_rgb", l.nerf_rgb},
                          {"mask", l.mask}, {"blending", l.blending}, {"alpha", l.alpha}})
     if (t.valid()) s->terms.emplace_back(name, t);
+  s->loss = with_depth_term(*s, c, geo, out.depth, l.total);
   // The progress PSNR is of the composite colour; without its loss term it is measured
   // separately (a forward-only mse nothing back-propagates through).
   s->psnr_mse = l.full_rgb.valid() ? l.full_rgb : mse(out.rgb, s->target_rgb);
@@ -99,9 +138,10 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   return s;
 }
 
-std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& f, int samples, const RayGeometry& geo,
-                                            int rays, bool background, int instances,
-                                            bool hard_blend) {
+std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int samples,
+                                            const RayGeometry& geo, int rays, bool background,
+                                            int instances, bool hard_blend) {
+  const FieldConfig f = scene_field(field, geo);
   if (!background && instances < 1)
     throw Error("a view needs the background or at least one object instance");
   auto v = std::make_unique<ViewGraph>();

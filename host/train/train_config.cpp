@@ -104,6 +104,26 @@ std::vector<ConfigOption> make_options() {
                          [](TrainConfig& c) -> int& { return c.field.dir_freqs; }));
   o.push_back(bool_option("view-dirs", "static colour depends on the view direction",
                           [](TrainConfig& c) -> bool& { return c.field.view_dirs; }));
+  o.push_back({"encoding", "input encoding of xyz (and t): frequency (the paper's) or hashgrid (multiresolution hash grid)",
+               [](const TrainConfig& c) { return std::string(encoding_name(c.field.encoding)); },
+               [](TrainConfig& c, const std::string& v) {
+                 const std::string t = trim(v);
+                 if (t == "frequency") c.field.encoding = Encoding::Frequency;
+                 else if (t == "hashgrid") c.field.encoding = Encoding::HashGrid;
+                 else bad_value("encoding", v, "is not one of frequency, hashgrid");
+               }});
+  o.push_back(int_option("hash-levels", "hash grid: resolution levels", 1, 32,
+                         [](TrainConfig& c) -> int& { return c.field.hash.levels; }));
+  o.push_back(int_option("hash-features", "hash grid: features per level", 1, 8,
+                         [](TrainConfig& c) -> int& { return c.field.hash.features; }));
+  o.push_back(int_option("hash-log2-size", "hash grid: log2 of the table entries per level", 4, 24,
+                         [](TrainConfig& c) -> int& { return c.field.hash.log2_size; }));
+  o.push_back(int_option("hash-min-res", "hash grid: cells per dimension of the coarsest level", 1, 1 << 20,
+                         [](TrainConfig& c) -> int& { return c.field.hash.min_resolution; }));
+  o.push_back(int_option("hash-max-res", "hash grid: cells per dimension of the finest level", 1, 1 << 20,
+                         [](TrainConfig& c) -> int& { return c.field.hash.max_resolution; }));
+  o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: 1 in NDC, else the largest camera coordinate)",
+                           0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.rays; }));
   o.push_back(int_option("samples", "stratified samples per ray", 2, 1024, [](TrainConfig& c) -> int& { return c.samples; }));
@@ -137,6 +157,8 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.weights.blending; }));
   o.push_back(float_option("w-alpha", "weight of the alpha loss (no object density outside its mask)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.weights.alpha; }));
+  o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(int_option("factor", "image downscale factor when loading the scene (0: the reader's default)", 0, 64,
                          [](TrainConfig& c) -> int& { return c.factor; }));
   o.push_back(int_option("holdout", "hold every n-th frame out of training for evaluation (0: none)", 0, 1000000,
@@ -190,6 +212,15 @@ void set_config_value(TrainConfig& c, const std::string& key, const std::string&
 }
 
 void validate(const TrainConfig& c) {
+  if (c.field.encoding == Encoding::HashGrid) {
+    HashGridConfig h = c.field.hash;
+    if (h.bound == 0.0f) h.bound = 1.0f;  // 0 is resolved from the scene
+    try {
+      validate(h);
+    } catch (const Error& e) {
+      throw Error(std::string("options 'hash-*': ") + e.what());
+    }
+  }
   if (c.field.skip >= c.field.depth)
     throw Error("option 'skip': " + std::to_string(c.field.skip) + " must be below depth " +
                 std::to_string(c.field.depth));
@@ -278,6 +309,9 @@ std::string network_fingerprint(const TrainConfig& c) {
   s << "depth=" << c.field.depth << " width=" << c.field.width << " skip=" << c.field.skip
     << " pos-freqs=" << c.field.pos_freqs << " dir-freqs=" << c.field.dir_freqs
     << " view-dirs=" << c.field.view_dirs;
+  if (c.field.encoding == Encoding::HashGrid)  // frequency runs keep their earlier fingerprint
+    s << " encoding=hashgrid hash-levels=" << c.field.hash.levels << " hash-features=" << c.field.hash.features
+      << " hash-log2-size=" << c.field.hash.log2_size;
   return s.str();
 }
 

@@ -163,6 +163,19 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     for (float& v : noise) v = c.noise_std * standard_normal(rng_);
     exec_->set(graph_->noise, noise);
   }
+  if (graph_->target_depth.valid()) {
+    // Minus the disparity: the NDC depth the renderer gives grows as disparity falls. A
+    // warped (augmented) view has no disparity map, so its rays carry no depth term.
+    std::vector<float> target(R, 0.0f), valid(R, augmented ? 0.0f : 1.0f);
+    if (!augmented)
+      for (size_t r = 0; r < R; ++r) {
+        const size_t x = static_cast<size_t>(batch.pixels[2 * r]);
+        const size_t y = static_cast<size_t>(batch.pixels[2 * r + 1]);
+        target[r] = -frame.disparity.data[y * static_cast<size_t>(frame.disparity.width) + x];
+      }
+    exec_->set(graph_->target_depth, target);
+    exec_->set(graph_->depth_valid, valid);
+  }
   if (joint) {
     exec_->set(graph_->target_masks, batch.masks);
     exec_->set(graph_->times, std::vector<float>(static_cast<size_t>(scene_.num_objects) * R * S,

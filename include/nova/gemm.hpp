@@ -1,7 +1,13 @@
 #pragma once
 // Row-major single-precision GEMM on a Runtime's queue: C = alpha * op(A) * op(B) + beta * C,
-// batched over `batch` matrices spaced by the strides. The provider is CLBlast with kernel
-// parameters from a per-device tuning table (gemm_tuning.cpp), applied once per device.
+// batched over `batch` matrices spaced by the strides. Two providers:
+//  - CLBlast, with kernel parameters from a per-device tuning table (gemm_tuning.cpp);
+//  - nova's own kernels (kernels/gemm.cl), written for PoCL's vectorisation across work-items.
+//    Measured on the 2-core CPU in a quick-preset hash-grid training step, they run the
+//    forward GEMMs about as fast as tuned CLBlast and the backward ones 1.4x slower, so they
+//    are not the default yet: NOVA_GEMM=kernels selects them.
+// NOVA_GEMM=clblast|kernels chooses the provider; CLBlast is the default on every device. A
+// transposed-A-and-B product always goes to CLBlast.
 #include <cstddef>
 #include <string>
 #include <unordered_map>
@@ -24,6 +30,14 @@ struct GemmArgs {
   size_t ldc = 0, stride_c = 0;
   size_t batch = 1;
 };
+
+enum class GemmProvider { CLBlast, Kernels };
+const char* gemm_provider_name(GemmProvider p);  // "clblast", "kernels"
+// The provider this runtime's GEMMs use (NOVA_GEMM, else by device type); Error on a bad
+// NOVA_GEMM value.
+GemmProvider gemm_provider(Runtime& rt);
+// Forces a provider for this runtime (benchmarks and tests compare them in one process).
+void set_gemm_provider(Runtime& rt, GemmProvider p);
 
 // Runs the GEMM; `temp` (gemm_temp_bytes large) avoids an allocation per call.
 void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp = nullptr);

@@ -24,6 +24,13 @@ Tensor blending_loss(Tensor raw, bool blend_sigmoid = true);
 Tensor alpha_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {},
                   bool blend_sigmoid = true);
 
+// Depth up to scale and shift (kernels/depth_loss.cl): depth and target standardised over the
+// rays with valid = 1, then their mean squared difference (2 (1 - correlation)). depth [R]
+// (render_composite's), target [R] affine in depth with a positive slope (minus the
+// disparity in NDC), valid [R] in {0, 1}; 0 when fewer than 2 rays are valid. As
+// DynamicNeRF's depth term, it resolves the depth of objects seen from one camera per time.
+Tensor depth_loss(Tensor depth, Tensor target, Tensor valid);
+
 // The reference code's weights (DESIGN.md, "Loss weights").
 struct NovelViewLossWeights {
   float full_rgb = 3.0f;  // mse(composite rgb, target rgb)

@@ -3,6 +3,9 @@
 // time-conditioned object NeRFs (one per object, run together as batched GEMMs). Both emit
 // the raw rows render_composite reads: [rgb(3), sigma, blend], pre-activation.
 //
+// The input encoding is the paper's positional encoding (PE) or a multiresolution hash grid
+// (hash_grid.hpp; 3-D for the static NeRF, 4-D xyzt for the objects) in its place.
+//
 //   static:  [PE_L(xyz)] -> trunk (depth x width, input re-fed after layer `skip`) -> feature
 //            feature -> sigma, blend;  [feature, PE_Ld(viewdir)] -> width/2 ReLU -> rgb
 //            (with view_dirs off the rgb head reads the feature alone)
@@ -12,10 +15,16 @@
 // dimension [K, ...] when K > 1, so one object's weights are a slice of them.
 #include <string>
 #include "nova/graph.hpp"
+#include "nova/hash_grid.hpp"
 
 namespace nova {
 
+enum class Encoding { Frequency, HashGrid };
+const char* encoding_name(Encoding e);  // "frequency", "hashgrid"
+
 struct FieldConfig {
+  Encoding encoding = Encoding::Frequency;
+  HashGridConfig hash;  // with Encoding::HashGrid; hash.bound <= 0: resolved from the scene
   int depth = 8;
   int width = 256;
   int skip = 4;        // 0-based trunk layer whose output gets the encoded input appended

@@ -20,19 +20,33 @@ struct RayGeometry {
   bool ndc = false;
   float near = 0.0f, far = 1.0f;  // sample range (NDC: 0 and 1)
   float ax = -1.0f, ay = -1.0f;   // NDC constants -fx/cx, -fy/cy of the training cameras
+  // Half-size of the box around the origin that holds what the cameras see: 1 in NDC, else
+  // the largest camera-origin coordinate (cameras look in at the scene).
+  float extent = 1.0f;
   int num_objects = 0;
+  bool disparity = false;  // every training frame has a disparity map
 };
 RayGeometry ray_geometry(const Scene& scene);
+
+// The field configuration with what depends on the scene filled in (the hash grid's box).
+FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g);
 
 struct StepGraph {
   Graph graph;
   int nerfs = 1;  // 1 (pretraining) or 1 + K
   // Data inputs, set every step (invalid when the graph has none).
   Tensor pixels, cameras, jitter, noise, times, target_rgb, target_masks;
+  // The depth term (when built, see depth_term_active): minus the disparity per ray, and
+  // 1 where it applies (0 on augmented steps, whose warped views have no disparity).
+  Tensor target_depth, depth_valid;
   Tensor loss;
   std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
   Tensor psnr_mse;  // the composite-colour mse the progress PSNR is computed from
 };
+
+// Whether the graphs get the depth loss: a weight, disparity maps, and NDC rays (where the
+// rendered depth is affine in disparity; metric depth is not).
+bool depth_term_active(const TrainConfig& c, const RayGeometry& g);
 
 // The static NeRF alone on `rays` rays (background pixels): mse of its colour.
 std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& g);

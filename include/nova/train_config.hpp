@@ -32,6 +32,9 @@ struct TrainConfig {
   int augment_start = 0;         // joint steps before the first augmented one (warm-up)
   float augment_degrees = 20.0f;
   NovelViewLossWeights weights;
+  // Depth up to scale and shift against the scene's disparity maps (disp/), in both phases,
+  // as DynamicNeRF (whose code NOVA builds on) does; off without disparity or with 0.
+  float w_depth = 0.04f;
   // Scene loading.
   int factor = 0;   // image downscale (0: the reader's default)
   int holdout = 0;  // every n-th frame is held out for evaluation (0: none; LLFF uses 8)

@@ -1,0 +1,128 @@
+// The multiresolution hash encoding op (kernels/hashgrid.cl).
+#include <cmath>
+
+#include "nova/error.hpp"
+#include "nova/executor.hpp"
+#include "nova/hash_grid.hpp"
+#include "op_util.hpp"
+
+namespace nova {
+namespace {
+
+constexpr int kMaxDims = 4, kMaxFeatures = 8, kMaxLevels = 32;
+
+class HashEncodingOp final : public Op {
+ public:
+  HashEncodingOp(size_t nets, size_t rows, size_t dims, const HashGridConfig& c)
+      : nets_(nets), rows_(rows), dims_(dims), c_(c), res_(hash_grid_resolutions(c)) {}
+  std::string type() const override { return "hash_encoding"; }
+
+  void forward(ExecContext& ctx) override {
+    upload_resolutions(ctx.rt);
+    ctx.launch("hashgrid", "hashgrid_forward", build_options())
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(res_buffer_).arg(ctx.out(0))
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows_, "rows"))
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound)
+        .run(nets_ * rows_ * c_.levels);
+  }
+
+  void backward(ExecContext& ctx) override {
+    cl_mem dy = ctx.grad_out(0), dtable = ctx.grad_in(1);
+    if (!dtable) return;
+    if (!dy) {  // nothing downstream reads the encoding: its table gradient is zero
+      if (!ctx.accumulate_in(1))
+        ctx.rt.fill_zero(dtable, nets_ * c_.levels * table_size() * c_.features * sizeof(float));
+      return;
+    }
+    upload_resolutions(ctx.rt);
+    ctx.launch("hashgrid", "hashgrid_backward", build_options())
+        .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(dtable)
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows_, "rows"))
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound)
+        .arg(static_cast<int>(ctx.accumulate_in(1)))
+        .run(nets_ * c_.levels);
+  }
+
+  // The table gradient needs the positions only; the table itself is linear in the output.
+  std::vector<TensorId> saved_for_backward() const override { return {inputs()[0]}; }
+
+ private:
+  unsigned table_size() const { return 1u << c_.log2_size; }
+  std::string build_options() const {
+    return "-DHG_DIMS=" + std::to_string(dims_) + " -DHG_FEATURES=" + std::to_string(c_.features);
+  }
+  void upload_resolutions(Runtime& rt) {
+    if (!res_buffer_.get()) res_buffer_ = rt.upload_floats(res_);
+  }
+
+  size_t nets_, rows_, dims_;
+  HashGridConfig c_;
+  std::vector<float> res_;
+  Buffer res_buffer_;
+};
+
+}  // namespace
+
+void validate(const HashGridConfig& c) {
+  auto fail = [](const std::string& what) { throw Error("hash grid: " + what, kExitUsage); };
+  if (c.levels < 1 || c.levels > kMaxLevels)
+    fail("levels must be in [1, " + std::to_string(kMaxLevels) + "], got " + std::to_string(c.levels));
+  if (c.features < 1 || c.features > kMaxFeatures)
+    fail("features per level must be in [1, " + std::to_string(kMaxFeatures) + "], got " +
+         std::to_string(c.features));
+  if (c.log2_size < 4 || c.log2_size > 24)
+    fail("log2 table size must be in [4, 24], got " + std::to_string(c.log2_size));
+  if (c.min_resolution < 1 || c.max_resolution < c.min_resolution || c.max_resolution > (1 << 20))
+    fail("resolutions must satisfy 1 <= min <= max <= 2^20, got min " +
+         std::to_string(c.min_resolution) + ", max " + std::to_string(c.max_resolution));
+  if (!(c.bound > 0.0f) || !std::isfinite(c.bound))
+    fail("bound must be a positive number, got " + std::to_string(c.bound));
+}
+
+std::vector<float> hash_grid_resolutions(const HashGridConfig& c) {
+  validate(c);
+  std::vector<float> res(c.levels);
+  const double growth =
+      c.levels > 1 ? std::exp((std::log(c.max_resolution) - std::log(c.min_resolution)) /
+                              (c.levels - 1))
+                   : 1.0;
+  for (int l = 0; l < c.levels; ++l)
+    res[l] = static_cast<float>(
+        std::max(1.0, std::floor(c.min_resolution * std::pow(growth, l) + 1e-9)));
+  return res;
+}
+
+Tensor hash_grid_table(Graph& g, const std::string& name, const HashGridConfig& c, int networks) {
+  validate(c);
+  Shape s{static_cast<size_t>(c.levels), size_t{1} << c.log2_size, static_cast<size_t>(c.features)};
+  if (networks > 1) s.dims.insert(s.dims.begin(), static_cast<size_t>(networks));
+  return g.parameter(name, s, Init::uniform(1e-4f));
+}
+
+Tensor hash_encoding(Tensor positions, Tensor table, const HashGridConfig& c) {
+  validate(c);
+  const Shape& ps = positions.shape();
+  const bool batched = ps.rank() == 3;
+  if (!(ps.rank() == 2 || batched) || ps.cols() < 1 || ps.cols() > kMaxDims)
+    throw Error("hash_encoding: positions must be [M, D] or [B, M, D] with 1 <= D <= 4, got " +
+                    ps.str(),
+                kExitInternal);
+  const size_t nets = batched ? ps[0] : 1;
+  Shape ts{static_cast<size_t>(c.levels), size_t{1} << c.log2_size, static_cast<size_t>(c.features)};
+  if (batched) ts.dims.insert(ts.dims.begin(), nets);
+  if (!(table.shape() == ts))
+    throw Error("hash_encoding: table must be " + ts.str() + ", got " + table.shape().str(),
+                kExitInternal);
+  if (positions.info().requires_grad)
+    throw Error("hash_encoding: positions cannot be differentiated (only the table)",
+                kExitInternal);
+  Shape out = ps;
+  out.dims.back() = static_cast<size_t>(c.outputs());
+  Graph& g = *positions.graph;
+  Tensor y = g.activation(table.info().name + ".enc", out);
+  g.add(std::make_unique<HashEncodingOp>(nets, ps.rows() / nets, ps.cols(), c), {positions, table},
+        {y});
+  return y;
+}
+
+}  // namespace nova

@@ -1,0 +1,114 @@
+// Multiresolution hash encoding (Mueller et al. 2022, Instant-NGP): per level l a grid of
+// resolution res[l] over the box [-bound, bound]^D; a point's feature is the D-linear
+// interpolation of the 2^D vertices of its cell. A level whose (res + 1)^D vertices fit into
+// the table is indexed densely, a finer one through the spatial hash
+// XOR_d (v_d * prime_d) mod T (T a power of two).
+//
+// Layout: positions [B, M, D]; table [B, L, T, F]; out [B, M, L * F]; res [L] (floats that
+// hold integers). D (HG_DIMS, <= 4: xyz or xyzt) and F (HG_FEATURES, <= 8) are build options,
+// so the corner and feature loops unroll (3x faster on PoCL than runtime bounds).
+//
+// The backward writes the table gradient without atomics, one work-item per (network, level)
+// walking the rows in order, so runs are bit-reproducible (exact resume); levels and
+// networks give its parallelism.
+
+#ifndef HG_DIMS
+#define HG_DIMS 3
+#endif
+#ifndef HG_FEATURES
+#define HG_FEATURES 2
+#endif
+#define HG_CORNERS (1u << HG_DIMS)
+
+// Cell and fractional position of coordinate x (in [-bound, bound], clamped) at resolution res.
+inline void hg_cell(float x, float inv_bound, float res, uint* cell, float* frac) {
+  const float u = clamp(0.5f * (x * inv_bound + 1.0f), 0.0f, 1.0f) * res;
+  float f = floor(u);
+  if (f > res - 1.0f) f = res - 1.0f;  // u == res: last cell, fraction 1
+  *cell = (uint)f;
+  *frac = u - f;
+}
+
+inline int hg_dense(uint res, uint table_size) {
+  ulong n = 1;
+  for (uint d = 0; d < HG_DIMS; ++d) {
+    n *= (ulong)res + 1;
+    if (n > table_size) return 0;
+  }
+  return 1;
+}
+
+// Table row of the vertex `corner` (bit d: +1 along dimension d) of the cell, and its weight.
+inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res,
+                      uint table_size, int dense, float* weight) {
+  const uint primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
+  uint index = 0, stride = 1;
+  float w = 1.0f;
+  for (uint d = 0; d < HG_DIMS; ++d) {
+    const uint bit = (corner >> d) & 1u;
+    const uint v = cell[d] + bit;
+    w *= bit ? frac[d] : 1.0f - frac[d];
+    if (dense) {
+      index += v * stride;
+      stride *= res + 1;
+    } else {
+      index ^= v * primes[d];
+    }
+  }
+  *weight = w;
+  return dense ? index : (index & (table_size - 1));
+}
+
+// One work-item per (network, level, row), rows fastest.
+__kernel void hashgrid_forward(__global const float* positions, __global const float* table,
+                               __constant float* res, __global float* out, uint nets,
+                               uint rows, uint levels, uint table_size, float inv_bound) {
+  const uint i = get_global_id(0);
+  if (i >= nets * levels * rows) return;
+  const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
+  const uint resolution = (uint)res[l];
+  const int dense = hg_dense(resolution, table_size);
+  uint cell[HG_DIMS];
+  float frac[HG_DIMS];
+  __global const float* p = positions + ((size_t)b * rows + r) * HG_DIMS;
+  for (uint d = 0; d < HG_DIMS; ++d) hg_cell(p[d], inv_bound, res[l], &cell[d], &frac[d]);
+
+  float acc[HG_FEATURES];
+  for (uint f = 0; f < HG_FEATURES; ++f) acc[f] = 0.0f;
+  __global const float* t = table + ((size_t)b * levels + l) * table_size * HG_FEATURES;
+  for (uint c = 0; c < HG_CORNERS; ++c) {
+    float w;
+    const uint v = hg_vertex(cell, frac, c, resolution, table_size, dense, &w);
+    for (uint f = 0; f < HG_FEATURES; ++f) acc[f] += w * t[(size_t)v * HG_FEATURES + f];
+  }
+  __global float* o = out + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
+  for (uint f = 0; f < HG_FEATURES; ++f) o[f] = acc[f];
+}
+
+// d table: one work-item per (network, level).
+__kernel void hashgrid_backward(__global const float* positions, __global const float* dout,
+                                __constant float* res, __global float* dtable, uint nets,
+                                uint rows, uint levels, uint table_size, float inv_bound,
+                                int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= nets * levels) return;
+  const uint l = i % levels, b = i / levels;
+  const uint resolution = (uint)res[l];
+  const int dense = hg_dense(resolution, table_size);
+  __global float* g = dtable + ((size_t)b * levels + l) * table_size * HG_FEATURES;
+  if (!accumulate)
+    for (size_t k = 0; k < (size_t)table_size * HG_FEATURES; ++k) g[k] = 0.0f;
+
+  for (uint r = 0; r < rows; ++r) {
+    uint cell[HG_DIMS];
+    float frac[HG_DIMS];
+    __global const float* p = positions + ((size_t)b * rows + r) * HG_DIMS;
+    for (uint d = 0; d < HG_DIMS; ++d) hg_cell(p[d], inv_bound, res[l], &cell[d], &frac[d]);
+    __global const float* dy = dout + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
+    for (uint c = 0; c < HG_CORNERS; ++c) {
+      float w;
+      const uint v = hg_vertex(cell, frac, c, resolution, table_size, dense, &w);
+      for (uint f = 0; f < HG_FEATURES; ++f) g[(size_t)v * HG_FEATURES + f] += w * dy[f];
+    }
+  }
+}

@@ -1,0 +1,102 @@
+// The depth loss up to scale and shift against a float64 reference, its invariances, and
+// central finite differences of the device forward.
+//
+// Tolerances: the loss is a mean of squared differences of standardised values (each O(1));
+// float32 sums over R = 57 rays carry a relative error of a few 1e-6, so rtol 1e-4. Gradients
+// use the harness default (2e-2 of the gradient's scale; the loss is smooth away from zero
+// variance, and the random depths keep the variance O(0.1)).
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+
+#include "harness.hpp"
+#include "nova/executor.hpp"
+#include "nova/losses.hpp"
+
+using namespace nova;
+using nova::test::OpUnderTest;
+using nova::test::random_floats;
+
+namespace {
+
+double reference(const std::vector<float>& p, const std::vector<float>& t,
+                 const std::vector<float>& w) {
+  double n = 0, sp = 0, st = 0;
+  for (size_t r = 0; r < p.size(); ++r) n += w[r], sp += w[r] * p[r], st += w[r] * t[r];
+  if (n < 2) return 0;
+  const double mp = sp / n, mt = st / n;
+  double vp = 0, vt = 0;
+  for (size_t r = 0; r < p.size(); ++r)
+    vp += w[r] * (p[r] - mp) * (p[r] - mp), vt += w[r] * (t[r] - mt) * (t[r] - mt);
+  const double dp = std::sqrt(vp / n + 1e-6), dt = std::sqrt(vt / n + 1e-6);
+  double sum = 0;
+  for (size_t r = 0; r < p.size(); ++r) {
+    const double e = (p[r] - mp) / dp - (t[r] - mt) / dt;
+    sum += w[r] * e * e;
+  }
+  return sum / n;
+}
+
+float device_loss(const std::vector<float>& p, const std::vector<float>& t,
+                  const std::vector<float>& w) {
+  Graph g;
+  const Shape s{p.size()};
+  Tensor tp = g.input("depth", s), tt = g.input("target", s), tw = g.input("valid", s);
+  Tensor loss = depth_loss(tp, tt, tw);
+  g.keep(loss);
+  Executor ex(test::runtime(), g);
+  ex.set(tp, p);
+  ex.set(tt, t);
+  ex.set(tw, w);
+  ex.forward();
+  return ex.get(loss).at(0);
+}
+
+std::vector<float> every_fifth_invalid(size_t n) {
+  std::vector<float> w(n, 1.0f);
+  for (size_t i = 0; i < n; i += 5) w[i] = 0.0f;
+  return w;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(depth_loss_op)
+
+BOOST_AUTO_TEST_CASE(forward_matches_reference) {
+  const size_t R = 57;
+  const auto p = random_floats(R, 0.0f, 1.0f, 1), t = random_floats(R, -2.0f, 3.0f, 2);
+  const auto w = every_fifth_invalid(R);
+  const double ref = reference(p, t, w);
+  BOOST_TEST(device_loss(p, t, w) == ref, boost::test_tools::tolerance(1e-4));
+  // Invalid rays do not count: changing them changes nothing.
+  auto p2 = p;
+  for (size_t i = 0; i < R; i += 5) p2[i] = 100.0f;
+  BOOST_TEST(device_loss(p2, t, w) == ref, boost::test_tools::tolerance(1e-4));
+}
+
+BOOST_AUTO_TEST_CASE(invariant_to_scale_and_shift) {
+  // A target affine in the depth (positive slope) gives 0; a negative slope gives ~4.
+  const size_t R = 41;
+  const auto p = random_floats(R, 0.2f, 0.9f, 3);
+  std::vector<float> t(R), u(R);
+  for (size_t r = 0; r < R; ++r) t[r] = 7.0f * p[r] - 3.0f, u[r] = -2.0f * p[r] + 1.0f;
+  const std::vector<float> w(R, 1.0f);
+  BOOST_TEST(device_loss(p, t, w) < 1e-4);
+  BOOST_TEST(std::fabs(device_loss(p, u, w) - 4.0f) < 1e-2);
+  // Fewer than two valid rays: no information, no loss.
+  std::vector<float> one(R, 0.0f);
+  one[3] = 1.0f;
+  BOOST_TEST(device_loss(p, u, one) == 0.0f);
+}
+
+BOOST_AUTO_TEST_CASE(gradient) {
+  const size_t R = 23;
+  test::check_gradients(
+      [&](Graph& g) {
+        const Shape s{R};
+        Tensor p = g.input("depth", s, true), t = g.input("target", s), w = g.input("valid", s);
+        return OpUnderTest{{p, t, w}, depth_loss(p, t, w)};
+      },
+      {random_floats(R, 0.0f, 1.0f, 4), random_floats(R, 0.0f, 1.0f, 5), every_fifth_invalid(R)});
+}
+
+BOOST_AUTO_TEST_SUITE_END()

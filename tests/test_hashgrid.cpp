@@ -1,0 +1,207 @@
+// The hash encoding against a float64 host reference (forward, dense and hashed levels,
+// clamping, one and several networks, 3-D and 4-D inputs) and central finite differences of
+// the device forward (table gradient, also when the table is read twice).
+//
+// Tolerances: the kernel's grid coordinate u = (x / bound + 1) / 2 * res carries a few float32
+// roundings, up to 4 ulp of res: du <= 4 res 2^-24 per dimension. The output's slope along
+// one coordinate is at most the largest difference of two table values (2 for values in
+// [-1, 1]), so atol = D * 2 * 4 res_max 2^-24 (7.6e-5 at D = 4, res 40) plus the float32 sum
+// of 16 terms; a wrong weight, vertex or hash is off by O(0.1). A cell misplaced by rounding
+// at a cell face changes nothing beyond that: D-linear interpolation is continuous across
+// faces. The encoding is linear in the table, so the finite differences
+// carry only float32 rounding: the harness default (2e-2 of the gradient's scale) holds.
+#include <boost/test/unit_test.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "harness.hpp"
+#include "nova/error.hpp"
+#include "nova/hash_grid.hpp"
+#include "nova/ops.hpp"
+
+using namespace nova;
+using nova::test::check_gradients;
+using nova::test::expect_close;
+using nova::test::OpUnderTest;
+using nova::test::random_floats;
+
+namespace {
+
+// Float64 reference of one network: positions [M, D], table [L, T, F] -> [M, L * F].
+std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, size_t dims,
+                                   const std::vector<float>& table, const HashGridConfig& c) {
+  const std::vector<float> res = hash_grid_resolutions(c);
+  const uint64_t T = uint64_t{1} << c.log2_size;
+  const uint32_t primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
+  std::vector<double> out(rows * c.levels * c.features, 0.0);
+  for (size_t r = 0; r < rows; ++r) {
+    for (int l = 0; l < c.levels; ++l) {
+      const double R = res[l];
+      double vertices = 1;
+      for (size_t d = 0; d < dims; ++d) vertices *= R + 1;
+      const bool dense = vertices <= static_cast<double>(T);
+      uint32_t cell[4];
+      double frac[4];
+      for (size_t d = 0; d < dims; ++d) {
+        const double u = std::clamp(0.5 * (pos[r * dims + d] / c.bound + 1.0), 0.0, 1.0) * R;
+        const double f = std::min(std::floor(u), R - 1);
+        cell[d] = static_cast<uint32_t>(f);
+        frac[d] = u - f;
+      }
+      for (uint32_t corner = 0; corner < (1u << dims); ++corner) {
+        double w = 1;
+        uint64_t index = 0, stride = 1;
+        uint32_t h = 0;
+        for (size_t d = 0; d < dims; ++d) {
+          const uint32_t bit = (corner >> d) & 1u, v = cell[d] + bit;
+          w *= bit ? frac[d] : 1 - frac[d];
+          index += v * stride;
+          stride *= static_cast<uint64_t>(R) + 1;
+          h ^= v * primes[d];  // uint32 wrap-around, as the kernel
+        }
+        const uint64_t row = dense ? index : (h & (T - 1));
+        for (int f = 0; f < c.features; ++f)
+          out[(r * c.levels + l) * c.features + f] += w * table[(l * T + row) * c.features + f];
+      }
+    }
+  }
+  return out;
+}
+
+// Positions in [-1.3 b, 1.3 b] (some clamped) plus the exact box corners and centre.
+std::vector<float> test_positions(size_t rows, size_t dims, float bound, unsigned seed) {
+  std::vector<float> p = random_floats(rows * dims, -1.3f * bound, 1.3f * bound, seed);
+  for (size_t d = 0; d < dims; ++d) {
+    p[d] = bound;
+    p[dims + d] = -bound;
+    p[2 * dims + d] = 0.0f;
+  }
+  return p;
+}
+
+std::vector<float> run_encoding(const std::vector<float>& pos, const std::vector<float>& table,
+                                size_t nets, size_t rows, size_t dims, const HashGridConfig& c) {
+  Graph g;
+  Shape ps = nets > 1 ? Shape{nets, rows, dims} : Shape{rows, dims};
+  Tensor p = g.input("p", ps);
+  Tensor t = g.input("table", nets > 1 ? Shape{nets, size_t(c.levels), size_t{1} << c.log2_size,
+                                                size_t(c.features)}
+                                       : Shape{size_t(c.levels), size_t{1} << c.log2_size,
+                                               size_t(c.features)});
+  Tensor y = hash_encoding(p, t, c);
+  g.keep(y);
+  Executor ex(test::runtime(), g);
+  ex.set(p, pos);
+  ex.set(t, table);
+  ex.forward();
+  return ex.get(y);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(hashgrid)
+
+BOOST_AUTO_TEST_CASE(resolutions_are_geometric) {
+  HashGridConfig c;
+  c.levels = 5;
+  c.min_resolution = 16;
+  c.max_resolution = 256;
+  const auto r = hash_grid_resolutions(c);
+  BOOST_TEST(r == (std::vector<float>{16, 32, 64, 128, 256}), boost::test_tools::per_element());
+}
+
+BOOST_AUTO_TEST_CASE(forward_matches_reference) {
+  // Levels from 2 to 40 cells with a 2^10 table: 3-D levels up to res 9 are dense (10^3 <=
+  // 1024), finer ones hashed; 4-D goes hashed sooner (res 5: 6^4 > 1024).
+  HashGridConfig c;
+  c.levels = 6;
+  c.features = 3;
+  c.log2_size = 10;
+  c.min_resolution = 2;
+  c.max_resolution = 40;
+  c.bound = 1.5f;
+  for (size_t dims : {3, 4}) {
+    for (size_t nets : {1, 2}) {
+      const size_t rows = 37;
+      const size_t tsize = size_t(c.levels) * (size_t{1} << c.log2_size) * c.features;
+      const auto pos = test_positions(nets * rows, dims, c.bound, 3 + unsigned(dims));
+      const auto table = random_floats(nets * tsize, -1, 1, 5 + unsigned(nets));
+      const auto out = run_encoding(pos, table, nets, rows, dims, c);
+      std::vector<double> ref;
+      for (size_t b = 0; b < nets; ++b) {
+        const std::vector<float> pb(pos.begin() + b * rows * dims, pos.begin() + (b + 1) * rows * dims);
+        const std::vector<float> tb(table.begin() + b * tsize, table.begin() + (b + 1) * tsize);
+        const auto r = hash_reference(pb, rows, dims, tb, c);
+        ref.insert(ref.end(), r.begin(), r.end());
+      }
+      BOOST_TEST_CONTEXT("dims " << dims << " networks " << nets) {
+        const double atol = dims * 2.0 * 4.0 * c.max_resolution * std::ldexp(1.0, -24) + 2e-6;
+        expect_close(out, ref, atol, 1e-6, "hash encoding");
+      }
+    }
+  }
+}
+
+BOOST_AUTO_TEST_CASE(table_gradient) {
+  // A 16-entry table so that most entries are hit by the 23 rows and the checked components
+  // carry real gradients.
+  HashGridConfig c;
+  c.levels = 3;
+  c.features = 2;
+  c.log2_size = 4;
+  c.min_resolution = 2;
+  c.max_resolution = 7;
+  for (size_t dims : {3, 4}) {
+    const size_t nets = 2, rows = 23;
+    const size_t tsize = size_t(c.levels) * 16 * c.features;
+    BOOST_TEST_CONTEXT("dims " << dims) {
+      check_gradients(
+          [&](Graph& g) {
+            Tensor p = g.input("p", Shape{nets, rows, dims});
+            Tensor t = g.input("table", Shape{nets, size_t(c.levels), 16, size_t(c.features)}, true);
+            return OpUnderTest{{p, t}, hash_encoding(p, t, c)};
+          },
+          {test_positions(nets * rows, dims, 1.0f, 9), random_floats(nets * tsize, -1, 1, 10)});
+    }
+  }
+}
+
+BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
+  // Two encodings of one table: its gradient is the sum of both (the second backward adds).
+  HashGridConfig c;
+  c.levels = 2;
+  c.features = 2;
+  c.log2_size = 4;
+  c.min_resolution = 3;
+  c.max_resolution = 5;
+  const size_t rows = 19;
+  check_gradients(
+      [&](Graph& g) {
+        Tensor p = g.input("p", Shape{rows, 3});
+        Tensor q = g.input("q", Shape{rows, 3});
+        Tensor t = g.input("table", Shape{size_t(c.levels), 16, size_t(c.features)}, true);
+        return OpUnderTest{{p, q, t}, concat({hash_encoding(p, t, c), hash_encoding(q, t, c)})};
+      },
+      {test_positions(rows, 3, 1.0f, 12), random_floats(rows * 3, -1, 1, 13),
+       random_floats(size_t(c.levels) * 16 * c.features, -1, 1, 14)});
+}
+
+BOOST_AUTO_TEST_CASE(bad_configurations_are_refused) {
+  auto refused = [](auto edit) {
+    HashGridConfig c;
+    edit(c);
+    BOOST_CHECK_THROW(validate(c), Error);
+  };
+  refused([](HashGridConfig& c) { c.levels = 0; });
+  refused([](HashGridConfig& c) { c.features = 9; });
+  refused([](HashGridConfig& c) { c.log2_size = 30; });
+  refused([](HashGridConfig& c) { c.max_resolution = c.min_resolution - 1; });
+  refused([](HashGridConfig& c) { c.bound = 0.0f; });
+  Graph g;
+  Tensor p = g.input("p", Shape{4, 5});
+  BOOST_CHECK_THROW(hash_encoding(p, hash_grid_table(g, "t", HashGridConfig{}), HashGridConfig{}),
+                    Error);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
