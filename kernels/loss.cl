@@ -107,12 +107,16 @@ __kernel void blend_sum_backward(__global const float* raw, __global const float
 
 // Alpha loss over the object NeRFs n >= 1, raw [N, R*S, C], delta [R, S] or [N, R, S]
 // (delta_stride 0 or R*S), noise [N, R, S] (use_noise), mask [N, R]:
-// partial[p] = sum over (n >= 1, r, i) = p, p + parts, ... of (1 - mask_n(r)) (alpha + blend),
-// alpha = 1 - exp(-ReLU(sigma + noise) delta).
+// partial[p] = sum over (n >= 1, r, i) = p, p + parts, ... of
+//   c_out (1 - mask_n(r)) (alpha + blend) + c_in mask_n(r) alpha,
+// alpha = 1 - exp(-ReLU(sigma + noise) delta). (1, 0) is the alpha loss; (0, 1) the sparsity
+// loss, an L1 on alpha inside the mask: for a given opacity 1 - prod(1 - alpha_i), sum alpha_i
+// is smallest when one sample holds it, so it favours one compact surface per ray.
 __kernel void alpha_outside_partial(__global const float* raw, __global const float* delta,
                                     __global const float* noise, __global const float* mask,
                                     __global float* partial, uint N, uint R, uint S, uint C,
-                                    uint delta_stride, int use_noise, int act, uint parts) {
+                                    uint delta_stride, int use_noise, int act, float c_out,
+                                    float c_in, uint parts) {
   const uint p = get_global_id(0);
   if (p >= parts) return;
   const uint rs = R * S, n_items = (N - 1) * rs;
@@ -123,7 +127,8 @@ __kernel void alpha_outside_partial(__global const float* raw, __global const fl
     const float outside = 1.0f - mask[n * R + at / S];
     const float sigma = fmax(raw[(size_t)e * C + 3] + (use_noise ? noise[e] : 0.0f), 0.0f);
     const float alpha = -expm1(-sigma * delta[n * delta_stride + at]);
-    s += outside * (alpha + loss_blend(raw[(size_t)e * C + 4], act));
+    const float blend = c_out != 0.0f ? loss_blend(raw[(size_t)e * C + 4], act) : 0.0f;
+    s += c_out * outside * (alpha + blend) + c_in * (1.0f - outside) * alpha;
   }
   partial[p] = s;
 }
@@ -132,21 +137,24 @@ __kernel void alpha_outside_backward(__global const float* raw, __global const f
                                      __global const float* noise, __global const float* mask,
                                      __global const float* gloss, __global float* grad, uint N,
                                      uint R, uint S, uint C, uint delta_stride, int use_noise,
-                                     int act, float scale, int accumulate) {
+                                     int act, float c_out, float c_in, float scale,
+                                     int accumulate) {
   const uint e = get_global_id(0);
   if (e >= N * R * S * C) return;
   const uint sample = e / C, ch = e % C, rs = R * S;
   const uint n = sample / rs, at = sample % rs;
   float g = 0.0f;
   if (n >= 1 && (ch == 3 || ch == 4)) {
-    const float w = gloss[0] * scale * (1.0f - mask[n * R + at / S]);
+    const float outside = 1.0f - mask[n * R + at / S];
+    const float w = gloss[0] * scale * c_out * outside;
     if (ch == 3) {
+      const float wa = gloss[0] * scale * (c_out * outside + c_in * (1.0f - outside));
       const float s = raw[e] + (use_noise ? noise[sample] : 0.0f);
       const float d = delta[n * delta_stride + at];
       const float t = exp(-fmax(s, 0.0f) * d);
       // d alpha / d sigma = delta exp(-sigma delta), 0 once exp underflows, 0 below the ReLU.
-      g = s > 0.0f && t > 0.0f ? w * t * d : 0.0f;
-    } else {
+      g = s > 0.0f && t > 0.0f ? wa * t * d : 0.0f;
+    } else if (w != 0.0f) {
       g = w * loss_blend_slope(loss_blend(raw[e], act), act);
     }
   }

@@ -68,8 +68,8 @@ int eval(const Args& args) {
       "views", po::value<std::string>()->default_value("auto"),
       "ground-truth views: cam0 (the paper's protocol: camera 0 at every time), heldout, all, or auto "
       "(cam0 when the scene has it, else heldout, else the --split frames)")(
-      "split", po::value<std::string>()->default_value(""), "evaluate every frame of this split (Blender/D-NeRF: test)")(
-      "soft-blend", po::bool_switch(), "keep the learnt blending (no hard blending)");
+      "split", po::value<std::string>()->default_value(""), "evaluate every frame of this split (Blender/D-NeRF: test)");
+  add_blend_options(desc);
   po::variables_map vm;
   if (!parse(args, desc, vm, "usage: nova eval --run RUN [--scene DIR] [--views auto|cam0|heldout|all] [--split test]"))
     return 0;
@@ -108,7 +108,7 @@ int eval(const Args& args) {
   const DeviceInfo device = select_device(vm["device"].as<std::string>());
   Runtime rt(device, false);
   ViewRenderer renderer(rt, run.files.config, run.geometry, run.files.checkpoint);
-  const bool hard = !vm["soft-blend"].as<bool>();
+  const BlendChoice blend = blend_choice(vm);
   const std::string pictures = run_dir + "/eval";
   std::filesystem::create_directories(pictures);
   std::vector<Score> scores, compose;
@@ -116,7 +116,7 @@ int eval(const Args& args) {
     const GroundTruthView& v = views[i];
     ViewRequest req;
     req.camera = v.camera;
-    req.hard_blend = hard;
+    req.hard_blend = blend.scene_views;
     req.instances = scene_instances(scene.num_objects, v.time);
     const ViewImage img = renderer.render(req);
     const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
@@ -138,7 +138,7 @@ int eval(const Args& args) {
     ViewRequest req;
     req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
     req.background = t.background;
-    req.hard_blend = hard;
+    req.hard_blend = blend.composition;
     for (const ComposeInstance& inst : t.instances) req.instances.push_back(placed_instance(inst));
     const ViewImage img = renderer.render(req);
     const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
@@ -153,7 +153,9 @@ int eval(const Args& args) {
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::ostringstream json;
   json << "{\n  \"run\": " << json_string(run_dir) << ",\n  \"scene\": " << json_string(scene.source)
-       << ",\n  \"step\": " << run.files.checkpoint.get("step") << ",\n";
+       << ",\n  \"step\": " << run.files.checkpoint.get("step")
+       << ",\n  \"hard_blend_views\": " << (blend.scene_views ? "true" : "false")
+       << ",\n  \"hard_blend_compose\": " << (blend.composition ? "true" : "false") << ",\n";
   json_scores(json, "views", scores);
   json << ",\n  \"mean_psnr\": " << std::setprecision(6) << mp << ",\n  \"mean_ssim\": " << ms << ",\n";
   json_scores(json, "compose", compose);

@@ -1,7 +1,7 @@
 // `nova render --run RUN --out DIR`: renders a trained run. Without --compose: one camera
 // (a training camera, or --pose) at one time or at every frame's time, writing colour,
 // depth and per-NeRF masks as PNG frames (and an MP4 with --video). With --compose SPEC:
-// every target of a composition spec (compose_spec.hpp), hard-blended.
+// every target of a composition spec (compose_spec.hpp), hard-blended (add_blend_options).
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -64,16 +64,17 @@ int render(const Args& args) {
       "compose", po::value<std::string>(), "composition spec: render each of its targets (see README)")(
       "video", po::bool_switch(), "also write video.mp4 of the colour frames")(
       "fps", po::value<double>()->default_value(10.0), "frame rate of the video")(
-      "soft-blend", po::bool_switch(), "keep the learnt blending (no hard blending of the static NeRF)")(
       "no-masks", po::bool_switch(), "skip the per-NeRF mask PNGs")(
       "force", po::bool_switch(), "replace an existing output folder");
+  add_blend_options(desc);
   po::variables_map vm;
   if (!parse(args, desc, vm, "usage: nova render --run RUN --out DIR [--camera I | --pose M] [--time T] [--compose SPEC] [--video]"))
     return 0;
   const auto t0 = std::chrono::steady_clock::now();
   OpenRun run = open_run(vm["run"].as<std::string>(), vm["scene"].as<std::string>(), false);
   const Scene& scene = run.scene;
-  const bool masks = !vm["no-masks"].as<bool>(), hard = !vm["soft-blend"].as<bool>();
+  const bool masks = !vm["no-masks"].as<bool>();
+  const BlendChoice blend = blend_choice(vm);
   ComposeSpec spec;
   if (vm.count("compose")) {
     spec = read_compose_spec(vm["compose"].as<std::string>());
@@ -105,7 +106,7 @@ int render(const Args& args) {
       ViewRequest req;
       req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
       req.background = t.background;
-      req.hard_blend = hard;
+      req.hard_blend = blend.composition;
       for (const ComposeInstance& i : t.instances) req.instances.push_back(placed_instance(i));
       frames.push_back(write_view(renderer.render(req), out.path(), t.name, masks));
       std::cerr << "rendered " << t.name << " (" << t.instances.size() << " instances)\n";
@@ -123,7 +124,7 @@ int render(const Args& args) {
     for (size_t i = 0; i < times.size(); ++i) {
       ViewRequest req;
       req.camera = camera;
-      req.hard_blend = hard;
+      req.hard_blend = blend.scene_views;
       req.instances = scene_instances(scene.num_objects, times[i]);
       frames.push_back(write_view(renderer.render(req), out.path(), frame_name(i).substr(0, 3), masks));
       std::cerr << "\rrendered " << i + 1 << "/" << times.size() << std::flush;

@@ -126,7 +126,8 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   NovelViewLoss l = novel_view_loss(out, raw, smp.delta, s->noise,
                                     {s->target_rgb, s->target_masks}, c.weights);
   for (auto [name, t] : {std::pair<const char*, Tensor>{"full_rgb", l.full_rgb}, {"nerf_rgb", l.nerf_rgb},
-                         {"mask", l.mask}, {"blending", l.blending}, {"alpha", l.alpha}})
+                         {"mask", l.mask}, {"blending", l.blending}, {"alpha", l.alpha},
+                         {"sparsity", l.sparsity}})
     if (t.valid()) s->terms.emplace_back(name, t);
   s->loss = with_depth_term(*s, c, geo, out.depth, l.total);
   // The progress PSNR is of the composite colour; without its loss term it is measured

@@ -27,6 +27,8 @@ NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor 
   const size_t nerfs = rendered.mask.shape()[0];
   add(l.alpha, nerfs > 1 ? w.alpha : 0.0f,
       [&] { return alpha_loss(raw, delta, targets.masks, noise, options.blend_sigmoid); });
+  add(l.sparsity, nerfs > 1 ? w.sparsity : 0.0f,
+      [&] { return sparsity_loss(raw, delta, targets.masks, noise); });
   if (terms.empty()) throw Error("novel_view_loss: every loss weight is 0", kExitUsage);
   l.total = weighted_sum(terms, weights);
   return l;

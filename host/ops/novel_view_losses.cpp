@@ -95,12 +95,13 @@ class BlendingLossOp final : public Op {
 
 class AlphaLossOp final : public Op {
  public:
+  // (c_out, c_in) = (1, 0): the alpha loss; (0, 1): the sparsity loss (kernels/loss.cl).
   AlphaLossOp(size_t nerfs, size_t rays, size_t samples, size_t channels, bool per_nerf_delta,
-              bool noise, bool act)
+              bool noise, bool act, float c_out, float c_in)
       : nerfs_(nerfs), rays_(rays), samples_(samples), channels_(channels),
-        per_nerf_delta_(per_nerf_delta), noise_(noise), act_(act),
+        per_nerf_delta_(per_nerf_delta), noise_(noise), act_(act), c_out_(c_out), c_in_(c_in),
         parts_(detail::reduction_parts((nerfs - 1) * rays * samples)) {}
-  std::string type() const override { return "alpha_loss"; }
+  std::string type() const override { return c_out_ != 0.0f ? "alpha_loss" : "sparsity_loss"; }
 
   unsigned delta_stride() const {
     return per_nerf_delta_ ? detail::u32(rays_ * samples_, "rays x samples") : 0u;
@@ -115,7 +116,8 @@ class AlphaLossOp final : public Op {
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(noise(ctx)).arg(ctx.in(2)).arg(ctx.workspace())
         .arg(detail::u32(nerfs_, "nerfs")).arg(detail::u32(rays_, "rays"))
         .arg(detail::u32(samples_, "samples")).arg(detail::u32(channels_, "channels"))
-        .arg(delta_stride()).arg(static_cast<int>(noise_)).arg(static_cast<int>(act_)).arg(parts)
+        .arg(delta_stride()).arg(static_cast<int>(noise_)).arg(static_cast<int>(act_))
+        .arg(c_out_).arg(c_in_).arg(parts)
         .run(parts_);
     finish_sum(ctx, parts, scale());
   }
@@ -129,7 +131,7 @@ class AlphaLossOp final : public Op {
         .arg(detail::u32(nerfs_, "nerfs")).arg(detail::u32(rays_, "rays"))
         .arg(detail::u32(samples_, "samples")).arg(detail::u32(channels_, "channels"))
         .arg(delta_stride()).arg(static_cast<int>(noise_)).arg(static_cast<int>(act_))
-        .arg(scale()).arg(static_cast<int>(ctx.accumulate_in(0)))
+        .arg(c_out_).arg(c_in_).arg(scale()).arg(static_cast<int>(ctx.accumulate_in(0)))
         .run(detail::u32(n, "raw size"));
   }
 
@@ -141,6 +143,7 @@ class AlphaLossOp final : public Op {
  private:
   size_t nerfs_, rays_, samples_, channels_;
   bool per_nerf_delta_, noise_, act_;
+  float c_out_, c_in_;
   size_t parts_;
 };
 
@@ -177,8 +180,10 @@ Tensor blending_loss(Tensor raw, bool blend_sigmoid) {
   return y;
 }
 
-Tensor alpha_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise, bool blend_sigmoid) {
-  const std::string op = "alpha_loss";
+namespace {
+
+Tensor alpha_like_loss(const std::string& op, Tensor raw, Tensor delta, Tensor masks, Tensor noise,
+                       bool blend_sigmoid, float c_out, float c_in) {
   const auto d = raw_dims(raw, op);
   if (d.batch < 2) bad(op, "needs at least one object NeRF (N >= 2), raw is " + raw.shape().str());
   if (masks.shape().rank() != 2 || masks.shape()[0] != d.batch)
@@ -192,13 +197,23 @@ Tensor alpha_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise, bool ble
     bad(op, "noise " + noise.shape().str() + " does not fit");
   for (const Tensor& t : {delta, masks, noise}) require_data(op, t);
   Graph& g = *raw.graph;
-  Tensor y = g.activation(raw.info().name + ".alpha_loss", Shape{1});
+  Tensor y = g.activation(raw.info().name + "." + op, Shape{1});
   std::vector<Tensor> inputs = {raw, delta, masks};
   if (noise.valid()) inputs.push_back(noise);
   g.add(std::make_unique<AlphaLossOp>(d.batch, rays, samples, d.cols, dn != d.rows, noise.valid(),
-                                      blend_sigmoid),
+                                      blend_sigmoid, c_out, c_in),
         inputs, {y});
   return y;
+}
+
+}  // namespace
+
+Tensor alpha_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise, bool blend_sigmoid) {
+  return alpha_like_loss("alpha_loss", raw, delta, masks, noise, blend_sigmoid, 1.0f, 0.0f);
+}
+
+Tensor sparsity_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise) {
+  return alpha_like_loss("sparsity_loss", raw, delta, masks, noise, true, 0.0f, 1.0f);
 }
 
 }  // namespace nova

@@ -157,6 +157,8 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.weights.blending; }));
   o.push_back(float_option("w-alpha", "weight of the alpha loss (no object density outside its mask)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.weights.alpha; }));
+  o.push_back(float_option("w-sparsity", "weight of the L1 on object alpha inside its mask (one compact surface per ray; not in the reference)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.weights.sparsity; }));
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(int_option("factor", "image downscale factor when loading the scene (0: the reader's default)", 0, 64,

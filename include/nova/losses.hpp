@@ -31,6 +31,13 @@ Tensor alpha_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {},
 // DynamicNeRF's depth term, it resolves the depth of objects seen from one camera per time.
 Tensor depth_loss(Tensor depth, Tensor target, Tensor valid);
 
+// Sparsity loss: sum over object NeRFs n >= 1, rays r, samples i of mask_n(r) alpha_n,i,
+// divided by K*R*S (arguments as alpha_loss). For a given opacity 1 - prod(1 - alpha_i) the
+// sum of alphas is smallest when one sample holds it all, so this L1 favours one compact
+// surface per ray: an object seen from a single camera per time cannot smear its density
+// along that camera's rays, which shows as streaks from any other camera.
+Tensor sparsity_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {});
+
 // The reference code's weights (DESIGN.md, "Loss weights").
 struct NovelViewLossWeights {
   float full_rgb = 3.0f;  // mse(composite rgb, target rgb)
@@ -38,6 +45,7 @@ struct NovelViewLossWeights {
   float mask = 0.1f;      // mse(M_n, masks): rendered per-NeRF masks against the masks
   float blending = 0.1f;  // blending_loss
   float alpha = 0.1f;     // alpha_loss (only built when there is an object NeRF)
+  float sparsity = 0.0f;  // sparsity_loss (not in the reference; likewise objects only)
 };
 
 struct NovelViewTargets {
@@ -48,7 +56,7 @@ struct NovelViewTargets {
 struct NovelViewLoss {
   Tensor total;  // scalar weighted sum of the present terms: pass to Graph::set_loss
   // Each term, unweighted (for logs); invalid (Tensor{}) when its weight is 0.
-  Tensor full_rgb, nerf_rgb, mask, blending, alpha;
+  Tensor full_rgb, nerf_rgb, mask, blending, alpha, sparsity;
 };
 
 // Builds the weighted loss of one render (raw/delta/noise/options: those given to
