@@ -12,57 +12,12 @@
 #include "nova/render.hpp"
 #include "nova/compose_spec.hpp"
 #include "nova/executor.hpp"
+#include "rays_reference.hpp"
 
 using namespace nova;
 using namespace nova::test;
 
 namespace {
-
-// A camera at `position` rotated by `angle` about y then `tilt` about x (c2w, OpenGL axes).
-Camera make_camera(double f, int w, int h, std::array<double, 3> position, double angle, double tilt) {
-  Camera c;
-  c.width = w;
-  c.height = h;
-  c.fx = c.fy = f;
-  c.cx = w / 2.0;
-  c.cy = h / 2.0;
-  const double ca = std::cos(angle), sa = std::sin(angle), ct = std::cos(tilt), st = std::sin(tilt);
-  // R = Ry(angle) * Rx(tilt)
-  const double R[3][3] = {{ca, sa * st, sa * ct}, {0, ct, -st}, {-sa, ca * st, ca * ct}};
-  for (int r = 0; r < 3; ++r) {
-    for (int k = 0; k < 3; ++k) c.c2w[r * 4 + k] = static_cast<float>(R[r][k]);
-    c.c2w[r * 4 + 3] = static_cast<float>(position[r]);
-  }
-  c.fx = c.fy = static_cast<float>(f);
-  return c;
-}
-
-struct RefRay {
-  std::array<double, 3> o, d, view;
-};
-
-// Straight from camera.hpp and the reference's ndc_rays (near plane `near`).
-RefRay ref_ray(const Camera& c, double i, double j, bool ndc, double near) {
-  const double cam[3] = {(i - c.cx) / c.fx, -(j - c.cy) / c.fy, -1.0};
-  RefRay r;
-  for (int k = 0; k < 3; ++k) {
-    r.d[k] = c.rotation(k, 0) * cam[0] + c.rotation(k, 1) * cam[1] + c.rotation(k, 2) * cam[2];
-    r.o[k] = c.position(k);
-  }
-  const double n = std::sqrt(r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2]);
-  for (int k = 0; k < 3; ++k) r.view[k] = r.d[k] / n;
-  if (ndc) {
-    const double W = 2 * c.cx, H = 2 * c.cy, focal = c.fx;
-    const double t = -(near + r.o[2]) / r.d[2];
-    std::array<double, 3> o;
-    for (int k = 0; k < 3; ++k) o[k] = r.o[k] + t * r.d[k];
-    const auto& d = r.d;
-    r.o = {-1 / (W / (2 * focal)) * o[0] / o[2], -1 / (H / (2 * focal)) * o[1] / o[2], 1 + 2 * near / o[2]};
-    r.d = {-1 / (W / (2 * focal)) * (d[0] / d[2] - o[0] / o[2]),
-           -1 / (H / (2 * focal)) * (d[1] / d[2] - o[1] / o[2]), -2 * near / o[2]};
-  }
-  return r;
-}
 
 struct RayRun {
   std::vector<float> o, d, view;
@@ -81,15 +36,6 @@ RayRun run_rays(const std::vector<Camera>& cams, const std::vector<float>& pixel
   ex.set(c, camera_rows(cams));
   ex.forward();
   return {ex.get(rays.origins), ex.get(rays.directions), ex.get(rays.viewdirs)};
-}
-
-std::vector<float> random_pixels(size_t R, int w, int h, unsigned seed) {
-  auto u = random_floats(R * 2, 0, 1, seed);
-  for (size_t r = 0; r < R; ++r) {
-    u[2 * r] = std::floor(u[2 * r] * w);
-    u[2 * r + 1] = std::floor(u[2 * r + 1] * h);
-  }
-  return u;
 }
 
 }  // namespace
@@ -182,26 +128,6 @@ SampleRun run_samples(const std::vector<Camera>& cams, const std::vector<float>&
     out.shapes.push_back(s.positions[k].shape());
   }
   return out;
-}
-
-// The reference's stratified depths: linspace(near, far, S); with jitter u, uniform between
-// the midpoints to the neighbours.
-std::vector<double> ref_depths(size_t R, size_t S, double near, double far, const std::vector<float>& u) {
-  std::vector<double> z(R * S);
-  for (size_t r = 0; r < R; ++r) {
-    std::vector<double> t(S);
-    for (size_t i = 0; i < S; ++i) t[i] = near * (1 - double(i) / (S - 1)) + far * double(i) / (S - 1);
-    for (size_t i = 0; i < S; ++i) {
-      if (u.empty()) {
-        z[r * S + i] = t[i];
-        continue;
-      }
-      const double lower = i > 0 ? 0.5 * (t[i - 1] + t[i]) : t[i];
-      const double upper = i + 1 < S ? 0.5 * (t[i] + t[i + 1]) : t[i];
-      z[r * S + i] = lower + (upper - lower) * u[r * S + i];
-    }
-  }
-  return z;
 }
 
 }  // namespace
@@ -345,23 +271,9 @@ BOOST_AUTO_TEST_CASE(instance_points_match_float64_reference) {
     std::vector<double> want;
     for (size_t b = 0; b < B; ++b)
       for (size_t i = 0; i < M; ++i) {
-        double p[3] = {q[i * 3], q[i * 3 + 1], q[i * 3 + 2]};
-        if (ndc) {
-          const double pz = 2.0 * near / (p[2] - 1.0);
-          p[0] = p[0] * pz / ax;
-          p[1] = p[1] * pz / ay;
-          p[2] = pz;
-        }
-        double r[3];
-        for (int k = 0; k < 3; ++k)
-          r[k] = m[b][k * 4] * p[0] + m[b][k * 4 + 1] * p[1] + m[b][k * 4 + 2] * p[2] + m[b][k * 4 + 3];
-        if (ndc) {
-          const double z = r[2];
-          r[0] = ax * r[0] / z;
-          r[1] = ay * r[1] / z;
-          r[2] = 1.0 + 2.0 * near / z;
-        }
-        for (int k = 0; k < 3; ++k) want.push_back(r[k]);
+        const auto r = ref_instance_point(m[b], {q[i * 3], q[i * 3 + 1], q[i * 3 + 2]}, ndc,
+                                          ax, ay, near);
+        want.insert(want.end(), r.begin(), r.end());
       }
     expect_close(got, want, 1e-4, 1e-4, ndc ? "instance_points ndc" : "instance_points metric");
   }

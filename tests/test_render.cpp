@@ -9,37 +9,6 @@
 using namespace nova;
 using namespace nova::test;
 
-namespace {
-
-// Moderate random fields: raw rgb and blend in [-3, 3], sigma in [-1, 4] (a quarter of the
-// samples clipped by the ReLU), spacing like 64 NDC samples (1/64 * |d|, |d| in [0.8, 1.2]),
-// the last sample 1e10 |d| as the reference does.
-RenderRefInput random_case(int nerfs, int rays, int samples, int channels, bool per_nerf_delta,
-                           bool noise, unsigned seed) {
-  RenderRefInput in;
-  in.nerfs = nerfs;
-  in.rays = rays;
-  in.samples = samples;
-  in.channels = channels;
-  const size_t rs = static_cast<size_t>(rays) * samples;
-  in.raw = to_double(random_floats(nerfs * rs * channels, -3, 3, seed));
-  const auto sig = random_floats(nerfs * rs, -1, 4, seed + 1);
-  for (size_t s = 0; s < nerfs * rs; ++s) in.raw[s * channels + 3] = sig[s];
-  const size_t dn = per_nerf_delta ? nerfs : 1;
-  const auto norm = random_floats(dn * rays, 0.8f, 1.2f, seed + 2);
-  in.delta.resize(dn * rs);
-  for (size_t q = 0; q < dn * static_cast<size_t>(rays); ++q)
-    for (int i = 0; i < samples; ++i)
-      in.delta[q * samples + i] = static_cast<float>((i + 1 < samples ? 1.0 / samples : 1e10) * norm[q]);
-  in.z.resize(rs);
-  for (int r = 0; r < rays; ++r)
-    for (int i = 0; i < samples; ++i) in.z[r * samples + i] = static_cast<float>((i + 0.5) / samples);
-  if (noise) in.noise = to_double(random_floats(nerfs * rs, -1, 1, seed + 3));
-  return in;
-}
-
-}  // namespace
-
 BOOST_AUTO_TEST_SUITE(render)
 
 // Forward tolerance: atol 2e-6, rtol 1e-5. Each output is a sum of at most S * N float32
@@ -60,7 +29,7 @@ BOOST_AUTO_TEST_CASE(matches_float64_reference) {
   unsigned seed = 11;
   for (const Config& c : configs) {
     const std::string what = "N=" + std::to_string(c.nerfs) + " C=" + std::to_string(c.channels);
-    const RenderRefInput in = random_case(c.nerfs, 3, 64, c.channels, c.per_nerf_delta, c.noise, seed);
+    const RenderRefInput in = random_render_case(c.nerfs, 3, 64, c.channels, c.per_nerf_delta, c.noise, seed);
     const RenderTargets t = random_targets(in, seed + 100);
     const DeviceRender d = run_device_render(in, t);
     expect_forward_close(d, in, 2e-6, 1e-5, what);
@@ -75,7 +44,7 @@ BOOST_AUTO_TEST_CASE(matches_float64_reference) {
 BOOST_AUTO_TEST_CASE(activated_inputs_and_hard_blending) {
   // Already activated inputs (rgb and blend in [0, 1]); blends kept away from the 0.5
   // threshold (it is a step) so finite differences never cross it.
-  RenderRefInput in = random_case(3, 3, 32, 5, false, false, 5);
+  RenderRefInput in = random_render_case(3, 3, 32, 5, false, false, 5);
   const auto u = random_floats(in.raw.size(), 0, 1, 6);
   for (size_t e = 0; e < in.raw.size(); ++e) {
     const size_t ch = e % 5;
@@ -98,7 +67,7 @@ BOOST_AUTO_TEST_CASE(activated_inputs_and_hard_blending) {
 // truncation error h^2 f''' / 6 is about 2e-5 and the float32 rounding of the loss
 // difference about 1e-7 / 2e-2 = 5e-6 of it, so 2e-2 leaves room without hiding an error).
 BOOST_AUTO_TEST_CASE(device_finite_differences) {
-  const RenderRefInput in = random_case(2, 2, 16, 5, true, false, 3);
+  const RenderRefInput in = random_render_case(2, 2, 16, 5, true, false, 3);
   for (int output = 0; output < 5; ++output) {
     const BuildFn build = [&](Graph& g) {
       Tensor raw = g.input("raw", Shape{2, 32, 5}, true);

@@ -98,6 +98,14 @@ std::vector<DeviceInfo> list_devices() {
       info.global_mem_bytes = device_value<cl_ulong>(devices[d], CL_DEVICE_GLOBAL_MEM_SIZE);
       info.max_alloc_bytes = device_value<cl_ulong>(devices[d], CL_DEVICE_MAX_MEM_ALLOC_SIZE);
       info.max_work_group_size = device_value<size_t>(devices[d], CL_DEVICE_MAX_WORK_GROUP_SIZE);
+      // Per-dimension limits (at least 3 dimensions in OpenCL 1.2): a launch must honour them
+      // as well as the work-group size.
+      const cl_uint dims = device_value<cl_uint>(devices[d], CL_DEVICE_MAX_WORK_ITEM_DIMENSIONS);
+      std::vector<size_t> sizes(std::max<cl_uint>(dims, 3), 0);
+      if (clGetDeviceInfo(devices[d], CL_DEVICE_MAX_WORK_ITEM_SIZES, sizes.size() * sizeof(size_t),
+                          sizes.data(), nullptr) == CL_SUCCESS)
+        for (int k = 0; k < 2; ++k)
+          if (sizes[k] > 0) info.max_work_item_sizes[k] = sizes[k];
       info.base_addr_align_bytes =
           device_value<cl_uint>(devices[d], CL_DEVICE_MEM_BASE_ADDR_ALIGN) / 8;
       info.fp64 = device_value<cl_device_fp_config>(devices[d], CL_DEVICE_DOUBLE_FP_CONFIG) != 0;

@@ -82,6 +82,7 @@ cl_kernel Runtime::kernel(const std::string& family, const std::string& name,
                     cl_status_name(st) + ")",
                 kExitInternal);
   kernels_[key] = k;
+  kernel_names_[k] = {family, name};
   return k;
 }
 
@@ -100,8 +101,9 @@ size_t Runtime::work_group_size(cl_kernel kernel) {
                            sizeof(multiple), &multiple, nullptr);
   // 256 keeps GPUs occupied without exhausting registers; never more than the kernel allows,
   // and a multiple of the preferred granularity where possible.
-  size_t wg = std::min<size_t>(256, std::max<size_t>(1, max_wg));
+  size_t wg = std::min<size_t>({256, std::max<size_t>(1, max_wg), info_.max_work_item_sizes[0]});
   if (multiple > 1 && wg >= multiple) wg -= wg % multiple;
+  wg = std::max<size_t>(1, wg);
   work_group_sizes_[kernel] = wg;
   return wg;
 }
@@ -159,6 +161,19 @@ std::vector<float> Runtime::download_floats(cl_mem src, size_t count) {
   return v;
 }
 
+void Runtime::note_launch(cl_kernel kernel, size_t dims, const size_t* size, const size_t* local) {
+  if (!record_launches_) return;
+  LaunchRecord r;
+  if (auto it = kernel_names_.find(kernel); it != kernel_names_.end())
+    std::tie(r.family, r.name) = it->second;
+  r.dims = dims;
+  for (size_t d = 0; d < dims && d < 2; ++d) {
+    r.size[d] = size[d];
+    r.local[d] = local[d];
+  }
+  launches_.insert(std::move(r));
+}
+
 // ---- Launch ----------------------------------------------------------------------------------
 
 Launch& Launch::arg(cl_mem m) {
@@ -186,6 +201,7 @@ void Launch::run(size_t n) {
   if (n == 0) return;
   const size_t wg = rt_.work_group_size(kernel_);
   const size_t global = (n + wg - 1) / wg * wg;
+  rt_.note_launch(kernel_, 1, &n, &wg);
   cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 1, nullptr, &global, &wg, 0, nullptr,
                                   nullptr),
            "clEnqueueNDRangeKernel");
@@ -194,13 +210,17 @@ void Launch::run(size_t n) {
 void Launch::run2(size_t n0, size_t n1) {
   if (n0 == 0 || n1 == 0) return;
   // Dimension 0 takes as much of the work-group as it can use: it is the contiguous one.
+  // Powers of two within the kernel's work-group size and the device's per-dimension limits.
   const size_t wg = rt_.work_group_size(kernel_);
+  const size_t* max_items = rt_.info().max_work_item_sizes;
   size_t l0 = 1;
-  while (l0 * 2 <= wg && l0 < n0) l0 *= 2;
+  while (l0 * 2 <= wg && l0 * 2 <= max_items[0] && l0 < n0) l0 *= 2;
   size_t l1 = 1;
-  while (l0 * l1 * 2 <= wg && l1 < n1) l1 *= 2;
+  while (l0 * l1 * 2 <= wg && l1 * 2 <= max_items[1] && l1 < n1) l1 *= 2;
   const size_t local[2] = {l0, l1};
   const size_t global[2] = {(n0 + l0 - 1) / l0 * l0, (n1 + l1 - 1) / l1 * l1};
+  const size_t size[2] = {n0, n1};
+  rt_.note_launch(kernel_, 2, size, local);
   cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 2, nullptr, global, local, 0, nullptr,
                                   nullptr),
            "clEnqueueNDRangeKernel");

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -30,6 +31,8 @@ struct DeviceInfo {
   cl_ulong global_mem_bytes = 0;
   cl_ulong max_alloc_bytes = 0;
   size_t max_work_group_size = 0;
+  // CL_DEVICE_MAX_WORK_ITEM_SIZES of dimensions 0 and 1 (no limit until queried).
+  size_t max_work_item_sizes[2] = {static_cast<size_t>(-1), static_cast<size_t>(-1)};
   cl_uint base_addr_align_bytes = 0;
   bool fp64 = false;
   bool unified_memory = false;
@@ -67,6 +70,20 @@ class Buffer {
 };
 
 class Runtime;
+
+// One kind of kernel launch, recorded when Runtime::record_launches is on: the kernel, the
+// problem size of each dimension (before rounding up) and the work-group size chosen for it.
+// Lets a test prove that every kernel ran at sizes that are no multiple of its work-group.
+struct LaunchRecord {
+  std::string family, name;
+  size_t dims = 1;
+  size_t size[2] = {1, 1};
+  size_t local[2] = {1, 1};
+  auto key() const {
+    return std::make_tuple(family, name, dims, size[0], size[1], local[0], local[1]);
+  }
+  bool operator<(const LaunchRecord& o) const { return key() < o.key(); }
+};
 
 // A kernel launch with its arguments set in order: launch(rt, k).arg(a).arg(b).run(n).
 class Launch {
@@ -118,6 +135,12 @@ class Runtime {
   // Work-group size for a 1D launch of `kernel` (queried, never assumed).
   size_t work_group_size(cl_kernel kernel);
 
+  // Off by default (no cost). When on, every distinct (kernel, sizes, work-group) launch of
+  // this runtime's own kernels is kept; CLBlast's launches are not seen.
+  void record_launches(bool on) { record_launches_ = on; }
+  const std::set<LaunchRecord>& launches() const { return launches_; }
+  void note_launch(cl_kernel kernel, size_t dims, const size_t* size, const size_t* local);
+
   Buffer alloc(size_t bytes);
   // A view of [offset, offset + bytes) of `parent`; offset must honour base_addr_align_bytes.
   Buffer sub_buffer(const Buffer& parent, size_t offset, size_t bytes);
@@ -140,6 +163,9 @@ class Runtime {
   std::map<std::pair<std::string, std::string>, cl_program> programs_;
   std::map<std::tuple<std::string, std::string, std::string>, cl_kernel> kernels_;
   std::map<cl_kernel, size_t> work_group_sizes_;
+  std::map<cl_kernel, std::pair<std::string, std::string>> kernel_names_;  // family, name
+  bool record_launches_ = false;
+  std::set<LaunchRecord> launches_;
 };
 
 // Throws ClError when status is not CL_SUCCESS.

@@ -1,0 +1,112 @@
+#pragma once
+// Float64 host references of the ray ops (kernels/sampling.cl), written from the conventions
+// (camera.hpp, the reference code's ndc_rays and stratified sampling) and independent of the
+// kernels. Shared by test_rays.cpp and test_odd_sizes.cpp.
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "harness.hpp"
+#include "nova/camera.hpp"
+
+namespace nova::test {
+
+// A camera at `position` rotated by `angle` about y then `tilt` about x (c2w, OpenGL axes).
+inline Camera make_camera(double f, int w, int h, std::array<double, 3> position, double angle, double tilt) {
+  Camera c;
+  c.width = w;
+  c.height = h;
+  c.fx = c.fy = f;
+  c.cx = w / 2.0;
+  c.cy = h / 2.0;
+  const double ca = std::cos(angle), sa = std::sin(angle), ct = std::cos(tilt), st = std::sin(tilt);
+  // R = Ry(angle) * Rx(tilt)
+  const double R[3][3] = {{ca, sa * st, sa * ct}, {0, ct, -st}, {-sa, ca * st, ca * ct}};
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) c.c2w[r * 4 + k] = static_cast<float>(R[r][k]);
+    c.c2w[r * 4 + 3] = static_cast<float>(position[r]);
+  }
+  c.fx = c.fy = static_cast<float>(f);
+  return c;
+}
+
+struct RefRay {
+  std::array<double, 3> o, d, view;
+};
+
+// Straight from camera.hpp and the reference's ndc_rays (near plane `near`).
+inline RefRay ref_ray(const Camera& c, double i, double j, bool ndc, double near) {
+  const double cam[3] = {(i - c.cx) / c.fx, -(j - c.cy) / c.fy, -1.0};
+  RefRay r;
+  for (int k = 0; k < 3; ++k) {
+    r.d[k] = c.rotation(k, 0) * cam[0] + c.rotation(k, 1) * cam[1] + c.rotation(k, 2) * cam[2];
+    r.o[k] = c.position(k);
+  }
+  const double n = std::sqrt(r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2]);
+  for (int k = 0; k < 3; ++k) r.view[k] = r.d[k] / n;
+  if (ndc) {
+    const double W = 2 * c.cx, H = 2 * c.cy, focal = c.fx;
+    const double t = -(near + r.o[2]) / r.d[2];
+    std::array<double, 3> o;
+    for (int k = 0; k < 3; ++k) o[k] = r.o[k] + t * r.d[k];
+    const auto& d = r.d;
+    r.o = {-1 / (W / (2 * focal)) * o[0] / o[2], -1 / (H / (2 * focal)) * o[1] / o[2], 1 + 2 * near / o[2]};
+    r.d = {-1 / (W / (2 * focal)) * (d[0] / d[2] - o[0] / o[2]),
+           -1 / (H / (2 * focal)) * (d[1] / d[2] - o[1] / o[2]), -2 * near / o[2]};
+  }
+  return r;
+}
+
+inline std::vector<float> random_pixels(size_t R, int w, int h, unsigned seed) {
+  auto u = random_floats(R * 2, 0, 1, seed);
+  for (size_t r = 0; r < R; ++r) {
+    u[2 * r] = std::floor(u[2 * r] * w);
+    u[2 * r + 1] = std::floor(u[2 * r + 1] * h);
+  }
+  return u;
+}
+
+// The reference's stratified depths: linspace(near, far, S); with jitter u, uniform between
+// the midpoints to the neighbours.
+inline std::vector<double> ref_depths(size_t R, size_t S, double near, double far, const std::vector<float>& u) {
+  std::vector<double> z(R * S);
+  for (size_t r = 0; r < R; ++r) {
+    std::vector<double> t(S);
+    for (size_t i = 0; i < S; ++i) t[i] = near * (1 - double(i) / (S - 1)) + far * double(i) / (S - 1);
+    for (size_t i = 0; i < S; ++i) {
+      if (u.empty()) {
+        z[r * S + i] = t[i];
+        continue;
+      }
+      const double lower = i > 0 ? 0.5 * (t[i - 1] + t[i]) : t[i];
+      const double upper = i + 1 < S ? 0.5 * (t[i] + t[i + 1]) : t[i];
+      z[r * S + i] = lower + (upper - lower) * u[r * S + i];
+    }
+  }
+  return z;
+}
+
+// One point seen by a placed instance: world-to-object map m (3x4 row-major); for NDC points
+// NDC -> world -> map -> NDC with the constants ax = -fx / cx, ay = -fy / cy and the near plane.
+inline std::array<double, 3> ref_instance_point(const std::array<double, 12>& m,
+                                                std::array<double, 3> p, bool ndc, double ax,
+                                                double ay, double near) {
+  if (ndc) {
+    const double pz = 2.0 * near / (p[2] - 1.0);
+    p[0] = p[0] * pz / ax;
+    p[1] = p[1] * pz / ay;
+    p[2] = pz;
+  }
+  std::array<double, 3> r;
+  for (int k = 0; k < 3; ++k)
+    r[k] = m[k * 4] * p[0] + m[k * 4 + 1] * p[1] + m[k * 4 + 2] * p[2] + m[k * 4 + 3];
+  if (ndc) {
+    const double z = r[2];
+    r[0] = ax * r[0] / z;
+    r[1] = ay * r[1] / z;
+    r[2] = 1.0 + 2.0 * near / z;
+  }
+  return r;
+}
+
+}  // namespace nova::test
