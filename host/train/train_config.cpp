@@ -186,16 +186,21 @@ TrainConfig preset_config(const std::string& name) {
   }
   if (name != "quick") throw Error("option 'preset': '" + name + "' is not one of quick, reference");
   c.preset = "quick";
-  c.field.depth = 4;
+  // A multiresolution hash grid in place of the positional encoding, with a 2 x 64 trunk:
+  // on the default synthetic scene it fits training views to 27-29 dB in 1,000 joint steps
+  // where the 4 x 64 frequency network reached 24 in 2,500, at a similar cost per step.
+  c.field.encoding = Encoding::HashGrid;
+  c.field.depth = 2;
   c.field.width = 64;
-  c.field.skip = 2;
+  c.field.skip = -1;
   c.field.pos_freqs = 8;
   c.rays = 256;
   c.samples = 32;
-  c.pretrain_steps = 400;
+  c.pretrain_steps = 500;
   c.steps = 2000;
-  c.lr = 2e-3f;
+  c.lr = 1e-2f;
   c.lr_decay_steps = 2500;
+  c.weights.sparsity = 0.1f;
   c.augment_start = 200;
   c.checkpoint_every = 250;
   c.log_every = 25;
