@@ -113,4 +113,23 @@ double check_gradients(const BuildFn& build, const std::vector<std::vector<float
   return worst;
 }
 
+std::vector<float> run_forward(const BuildFn& build, const std::vector<std::vector<float>>& values) {
+  Graph g;
+  OpUnderTest op = build(g);
+  g.keep(op.output);
+  Executor ex(runtime(), g);
+  for (size_t i = 0; i < values.size(); ++i) ex.set(op.inputs[i], values[i]);
+  ex.forward();
+  return ex.get(op.output);
+}
+
+double activation_reference(Activation a, double x) {
+  switch (a) {
+    case Activation::ReLU: return x > 0 ? x : 0;
+    case Activation::Sigmoid: return 1 / (1 + std::exp(-x));
+    case Activation::Softplus: return std::log1p(std::exp(x));
+    default: return x;
+  }
+}
+
 }  // namespace nova::test

@@ -7,6 +7,7 @@
 
 #include "nova/executor.hpp"
 #include "nova/graph.hpp"
+#include "nova/ops.hpp"
 #include "nova/runtime.hpp"
 
 namespace nova::test {
@@ -45,6 +46,13 @@ struct GradCheckOptions {
 // input), runs forward + backward and compares the gradient of every input that requires one
 // with central differences of the same device forward (in float32). Returns the worst
 // normalised error over all checked components.
+// Runs a forward pass of the graph `build` makes on `values` (one vector per input) and
+// returns its output.
+std::vector<float> run_forward(const BuildFn& build, const std::vector<std::vector<float>>& values);
+
+// Float64 value of an activation, the reference of the bias_act kernels.
+double activation_reference(Activation a, double x);
+
 double check_gradients(const BuildFn& build, const std::vector<std::vector<float>>& values,
                        const GradCheckOptions& options = {});
 

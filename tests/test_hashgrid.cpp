@@ -82,20 +82,15 @@ std::vector<float> test_positions(size_t rows, size_t dims, float bound, unsigne
 
 std::vector<float> run_encoding(const std::vector<float>& pos, const std::vector<float>& table,
                                 size_t nets, size_t rows, size_t dims, const HashGridConfig& c) {
-  Graph g;
-  Shape ps = nets > 1 ? Shape{nets, rows, dims} : Shape{rows, dims};
-  Tensor p = g.input("p", ps);
-  Tensor t = g.input("table", nets > 1 ? Shape{nets, size_t(c.levels), size_t{1} << c.log2_size,
-                                                size_t(c.features)}
-                                       : Shape{size_t(c.levels), size_t{1} << c.log2_size,
-                                               size_t(c.features)});
-  Tensor y = hash_encoding(p, t, c);
-  g.keep(y);
-  Executor ex(test::runtime(), g);
-  ex.set(p, pos);
-  ex.set(t, table);
-  ex.forward();
-  return ex.get(y);
+  Shape ts{size_t(c.levels), size_t{1} << c.log2_size, size_t(c.features)};
+  if (nets > 1) ts.dims.insert(ts.dims.begin(), nets);
+  return test::run_forward(
+      [&](Graph& g) {
+        Tensor p = g.input("p", nets > 1 ? Shape{nets, rows, dims} : Shape{rows, dims});
+        Tensor t = g.input("table", ts);
+        return OpUnderTest{{p, t}, hash_encoding(p, t, c)};
+      },
+      {pos, table});
 }
 
 }  // namespace

@@ -79,14 +79,6 @@ void expect_grad_close(const std::vector<float>& got, const std::vector<double>&
   expect_close(got, want, 1e-6 * max_abs(want), 1e-5, what);
 }
 
-double act_ref(Activation a, double x) {
-  switch (a) {
-    case Activation::ReLU: return x > 0 ? x : 0;
-    case Activation::Sigmoid: return 1 / (1 + std::exp(-x));
-    case Activation::Softplus: return std::log1p(std::exp(x));
-    default: return x;
-  }
-}
 
 double act_slope(Activation a, double x) {
   switch (a) {
@@ -203,7 +195,7 @@ BOOST_AUTO_TEST_CASE(activation_and_reduce) {
             db_abs(b.size(), 0.0);
         for (size_t i = 0; i < h.size(); ++i) {
           const double x = double(h[i]) + bias(i);
-          ref[i] = act_ref(a, x);
+          ref[i] = test::activation_reference(a, x);
           dh_ref[i] = up[i] * act_slope(a, x);
           const size_t bi = (i / (kRows * cols)) * cols + i % cols;
           db_ref[bi] += dh_ref[i];

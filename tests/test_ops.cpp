@@ -20,29 +20,9 @@ using nova::test::check_gradients;
 using nova::test::expect_close;
 using nova::test::OpUnderTest;
 using nova::test::random_floats;
+using nova::test::run_forward;
 
 namespace {
-
-double act_ref(Activation a, double x) {
-  switch (a) {
-    case Activation::ReLU: return x > 0 ? x : 0;
-    case Activation::Sigmoid: return 1 / (1 + std::exp(-x));
-    case Activation::Softplus: return std::log1p(std::exp(x));
-    default: return x;
-  }
-}
-
-// Runs a forward pass of a one-output graph built by `build` on `values`.
-std::vector<float> run_forward(const test::BuildFn& build,
-                               const std::vector<std::vector<float>>& values) {
-  Graph g;
-  OpUnderTest op = build(g);
-  g.keep(op.output);
-  Executor ex(test::runtime(), g);
-  for (size_t i = 0; i < values.size(); ++i) ex.set(op.inputs[i], values[i]);
-  ex.forward();
-  return ex.get(op.output);
-}
 
 const Activation kActivations[] = {Activation::Identity, Activation::ReLU, Activation::Sigmoid,
                                    Activation::Softplus};
@@ -100,7 +80,7 @@ BOOST_AUTO_TEST_CASE(bias_act_forward) {
           {h, b});
       std::vector<double> ref(h.size());
       for (size_t i = 0; i < h.size(); ++i)
-        ref[i] = act_ref(a, static_cast<double>(h[i]) + b[(i / (rows * cols)) * cols + i % cols]);
+        ref[i] = test::activation_reference(a, static_cast<double>(h[i]) + b[(i / (rows * cols)) * cols + i % cols]);
       expect_close(out, ref, 1e-6, 1e-5, std::string("bias_") + activation_name(a));
     }
   }
