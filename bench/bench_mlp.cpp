@@ -84,7 +84,8 @@ double host_blas_seconds(const std::vector<LayerShape>&, size_t, bool, int) { re
 
 int mlp(const Args& args) {
   const Options o(args, {{"batches", "16384,65536"}, {"repeats", "3"}, {"device", ""},
-                         {"width", "256"}, {"depth", "8"}});
+                         {"width", "256"}, {"depth", "8"},
+                         {"gemm", "clblast"}});
   if (o.help()) {
     std::cout << o.usage("nova-bench mlp");
     return 0;
@@ -94,6 +95,7 @@ int mlp(const Args& args) {
   MlpConfig c;
   c.width = static_cast<int>(o.integer("width"));
   c.depth = static_cast<int>(o.integer("depth"));
+  if (c.skip >= c.depth) c.skip = -1;  // shallow networks have no skip connection
   const size_t in = 63;
   const auto shapes = layer_shapes(c, in);
   std::cout << "device " << rt.info().name << " (" << rt.info().type_name() << "), GEMM tuning "
@@ -101,59 +103,73 @@ int mlp(const Args& args) {
             << "network 63 -> " << c.depth << " x " << c.width << " (skip after layer " << c.skip
             << ") -> 4; median of " << repeats << " after a warm-up\n\n";
 
+  std::vector<GemmProvider> providers;
+  {
+    std::stringstream list(o.str("gemm"));
+    for (std::string name; std::getline(list, name, ',');) {
+      if (name == "clblast") providers.push_back(GemmProvider::CLBlast);
+      else if (name == "kernels") providers.push_back(GemmProvider::Kernels);
+      else throw Error("--gemm: '" + name + "' is not one of clblast, kernels");
+    }
+  }
   std::ostringstream csv;
-  csv << "batch,pass,device_samples_per_s,device_gflops,host_blas_samples_per_s,"
+  csv << "gemm,batch,pass,device_samples_per_s,device_gflops,host_blas_samples_per_s,"
          "host_blas_gflops,device_over_host\n";
   std::cout << std::left << std::setw(8) << "batch" << std::setw(18) << "pass" << std::right
             << std::setw(14) << "samples/s" << std::setw(10) << "GFLOP/s" << std::setw(16)
             << "host BLAS s/s" << std::setw(10) << "GFLOP/s" << std::setw(10) << "ratio" << "\n";
   std::string profile;
-  for (long batch_l : o.integers("batches")) {
-    const size_t m = static_cast<size_t>(batch_l);
-    for (bool backward : {false, true}) {
-      Graph g;
-      Tensor x = g.input("x", Shape{m, in});
-      Tensor target = g.input("target", Shape{m, 4});
-      Tensor y = build_mlp(x, c).output;
-      if (backward)
-        g.set_loss(mse(y, target));
-      else
-        g.keep(y);
-      ExecutorOptions eo;
-      eo.profile = true;
-      Executor ex(rt, g, eo);
-      ex.set(x, std::vector<float>(m * in, 0.1f));
-      ex.set(target, std::vector<float>(m * 4, 0.5f));
-      const double device_s = time_median(repeats, [&] {
-        ex.forward();
-        if (backward) ex.backward();
-        rt.finish();
-      });
-      if (backward && !profile.size()) {
-        ex.reset_timings();
-        ex.forward();
-        ex.backward();
-        profile = "per-op time, one training step at batch " + std::to_string(m) + ":\n" +
-                  ex.profile_table();
-      }
-      const double host_s = host_blas_seconds(shapes, m, backward, repeats);
-      const double flops = gemm_flops(shapes, m, backward);
-      const char* pass = backward ? "forward+backward" : "forward";
-      const double dev_rate = m / device_s;
-      std::cout << std::left << std::setw(8) << m << std::setw(18) << pass << std::right
-                << std::fixed << std::setprecision(0) << std::setw(14) << dev_rate
-                << std::setprecision(1) << std::setw(10) << flops / device_s * 1e-9;
-      csv << m << "," << pass << "," << dev_rate << "," << flops / device_s * 1e-9 << ",";
-      if (host_s > 0) {
-        const double host_rate = m / host_s;
-        std::cout << std::setprecision(0) << std::setw(16) << host_rate << std::setprecision(1)
-                  << std::setw(10) << flops / host_s * 1e-9 << std::setprecision(3)
-                  << std::setw(10) << dev_rate / host_rate << std::endl;
-        csv << host_rate << "," << flops / host_s * 1e-9 << "," << dev_rate / host_rate << "\n";
-      } else {  // built without a host BLAS: empty columns
-        std::cout << std::setw(16) << "-" << std::setw(10) << "-" << std::setw(10) << "-"
-                  << std::endl;
-        csv << ",,\n";
+  for (GemmProvider provider : providers) {
+    set_gemm_provider(rt, provider);
+    std::cout << "GEMM provider: " << gemm_provider_name(provider) << "\n";
+    for (long batch_l : o.integers("batches")) {
+      const size_t m = static_cast<size_t>(batch_l);
+      for (bool backward : {false, true}) {
+        Graph g;
+        Tensor x = g.input("x", Shape{m, in});
+        Tensor target = g.input("target", Shape{m, 4});
+        Tensor y = build_mlp(x, c).output;
+        if (backward)
+          g.set_loss(mse(y, target));
+        else
+          g.keep(y);
+        ExecutorOptions eo;
+        eo.profile = true;
+        Executor ex(rt, g, eo);
+        ex.set(x, std::vector<float>(m * in, 0.1f));
+        ex.set(target, std::vector<float>(m * 4, 0.5f));
+        const double device_s = time_median(repeats, [&] {
+          ex.forward();
+          if (backward) ex.backward();
+          rt.finish();
+        });
+        if (backward && !profile.size()) {
+          ex.reset_timings();
+          ex.forward();
+          ex.backward();
+          profile = "per-op time, one training step at batch " + std::to_string(m) + " (" +
+                    gemm_provider_name(provider) + "):\n" +
+                    ex.profile_table();
+        }
+        const double host_s = host_blas_seconds(shapes, m, backward, repeats);
+        const double flops = gemm_flops(shapes, m, backward);
+        const char* pass = backward ? "forward+backward" : "forward";
+        const double dev_rate = m / device_s;
+        std::cout << std::left << std::setw(8) << m << std::setw(18) << pass << std::right
+                  << std::fixed << std::setprecision(0) << std::setw(14) << dev_rate
+                  << std::setprecision(1) << std::setw(10) << flops / device_s * 1e-9;
+        csv << gemm_provider_name(provider) << "," << m << "," << pass << "," << dev_rate << "," << flops / device_s * 1e-9 << ",";
+        if (host_s > 0) {
+          const double host_rate = m / host_s;
+          std::cout << std::setprecision(0) << std::setw(16) << host_rate << std::setprecision(1)
+                    << std::setw(10) << flops / host_s * 1e-9 << std::setprecision(3)
+                    << std::setw(10) << dev_rate / host_rate << std::endl;
+          csv << host_rate << "," << flops / host_s * 1e-9 << "," << dev_rate / host_rate << "\n";
+        } else {  // built without a host BLAS: empty columns
+          std::cout << std::setw(16) << "-" << std::setw(10) << "-" << std::setw(10) << "-"
+                    << std::endl;
+          csv << ",,\n";
+        }
       }
     }
   }
