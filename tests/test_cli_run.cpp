@@ -25,9 +25,11 @@ Result nova_cli(const std::string& args, const TempDir& dir) {
   return r;
 }
 
-// The smallest networks and schedule that exercise every phase (pretraining, joint,
-// augmented steps) in a few seconds.
+// The smallest networks (small hash tables: quick's 2^16 x 16 levels would make every
+// checkpoint 75 MB) and schedule that exercise every phase (pretraining, joint, augmented
+// steps) in a few seconds.
 const std::string kTiny =
+    " --hash-levels 4 --hash-log2-size 10 --hash-max-res 32"
     " --depth 2 --width 16 --skip -1 --pos-freqs 4 --dir-freqs 2 --rays 64 --samples 8"
     " --pretrain-steps 3 --steps 6 --augment-start 0 --log-every 3 --checkpoint-every 4";
 
