@@ -82,8 +82,7 @@ std::vector<float> test_positions(size_t rows, size_t dims, float bound, unsigne
 
 std::vector<float> run_encoding(const std::vector<float>& pos, const std::vector<float>& table,
                                 size_t nets, size_t rows, size_t dims, const HashGridConfig& c) {
-  Shape ts{size_t(c.levels), size_t{1} << c.log2_size, size_t(c.features)};
-  if (nets > 1) ts.dims.insert(ts.dims.begin(), nets);
+  const Shape ts = hash_grid_table_shape(c, nets);
   return test::run_forward(
       [&](Graph& g) {
         Tensor p = g.input("p", nets > 1 ? Shape{nets, rows, dims} : Shape{rows, dims});
@@ -119,7 +118,7 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
   for (size_t dims : {3, 4}) {
     for (size_t nets : {1, 2}) {
       const size_t rows = 37;
-      const size_t tsize = size_t(c.levels) * (size_t{1} << c.log2_size) * c.features;
+      const size_t tsize = hash_grid_table_shape(c).numel();
       const auto pos = test_positions(nets * rows, dims, c.bound, 3 + unsigned(dims));
       const auto table = random_floats(nets * tsize, -1, 1, 5 + unsigned(nets));
       const auto out = run_encoding(pos, table, nets, rows, dims, c);
@@ -149,12 +148,12 @@ BOOST_AUTO_TEST_CASE(table_gradient) {
   c.max_resolution = 7;
   for (size_t dims : {3, 4}) {
     const size_t nets = 2, rows = 23;
-    const size_t tsize = size_t(c.levels) * 16 * c.features;
+    const size_t tsize = hash_grid_table_shape(c).numel();
     BOOST_TEST_CONTEXT("dims " << dims) {
       check_gradients(
           [&](Graph& g) {
             Tensor p = g.input("p", Shape{nets, rows, dims});
-            Tensor t = g.input("table", Shape{nets, size_t(c.levels), 16, size_t(c.features)}, true);
+            Tensor t = g.input("table", hash_grid_table_shape(c, nets), true);
             return OpUnderTest{{p, t}, hash_encoding(p, t, c)};
           },
           {test_positions(nets * rows, dims, 1.0f, 9), random_floats(nets * tsize, -1, 1, 10)});
@@ -175,11 +174,11 @@ BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
       [&](Graph& g) {
         Tensor p = g.input("p", Shape{rows, 3});
         Tensor q = g.input("q", Shape{rows, 3});
-        Tensor t = g.input("table", Shape{size_t(c.levels), 16, size_t(c.features)}, true);
+        Tensor t = g.input("table", hash_grid_table_shape(c), true);
         return OpUnderTest{{p, q, t}, concat({hash_encoding(p, t, c), hash_encoding(q, t, c)})};
       },
       {test_positions(rows, 3, 1.0f, 12), random_floats(rows * 3, -1, 1, 13),
-       random_floats(size_t(c.levels) * 16 * c.features, -1, 1, 14)});
+       random_floats(hash_grid_table_shape(c).numel(), -1, 1, 14)});
 }
 
 BOOST_AUTO_TEST_CASE(bad_configurations_are_refused) {

@@ -1,4 +1,5 @@
 // The multiresolution hash encoding op (kernels/hashgrid.cl).
+#include <algorithm>
 #include <cmath>
 
 #include "nova/error.hpp"
@@ -92,11 +93,16 @@ std::vector<float> hash_grid_resolutions(const HashGridConfig& c) {
   return res;
 }
 
+Shape hash_grid_table_shape(const HashGridConfig& c, size_t networks) {
+  Shape s{static_cast<size_t>(c.levels), size_t{1} << c.log2_size, static_cast<size_t>(c.features)};
+  if (networks > 1) s.dims.insert(s.dims.begin(), networks);
+  return s;
+}
+
 Tensor hash_grid_table(Graph& g, const std::string& name, const HashGridConfig& c, int networks) {
   validate(c);
-  Shape s{static_cast<size_t>(c.levels), size_t{1} << c.log2_size, static_cast<size_t>(c.features)};
-  if (networks > 1) s.dims.insert(s.dims.begin(), static_cast<size_t>(networks));
-  return g.parameter(name, s, Init::uniform(1e-4f));
+  return g.parameter(name, hash_grid_table_shape(c, static_cast<size_t>(std::max(networks, 1))),
+                     Init::uniform(1e-4f));
 }
 
 Tensor hash_encoding(Tensor positions, Tensor table, const HashGridConfig& c) {
@@ -108,7 +114,8 @@ Tensor hash_encoding(Tensor positions, Tensor table, const HashGridConfig& c) {
                     ps.str(),
                 kExitInternal);
   const size_t nets = batched ? ps[0] : 1;
-  Shape ts{static_cast<size_t>(c.levels), size_t{1} << c.log2_size, static_cast<size_t>(c.features)};
+  // A batched input always has a batched table, even of one network.
+  Shape ts = hash_grid_table_shape(c);
   if (batched) ts.dims.insert(ts.dims.begin(), nets);
   if (!(table.shape() == ts))
     throw Error("hash_encoding: table must be " + ts.str() + ", got " + table.shape().str(),

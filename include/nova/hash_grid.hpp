@@ -29,6 +29,9 @@ void validate(const HashGridConfig& c);
 // Cells per dimension of each level: floor(min * g^l), g = (max / min)^(1 / (L - 1)).
 std::vector<float> hash_grid_resolutions(const HashGridConfig& c);
 
+// Shape of the tables of `networks` encodings: [L, T, F], or [networks, L, T, F] when > 1.
+Shape hash_grid_table_shape(const HashGridConfig& c, size_t networks = 1);
+
 // The table parameter `name` of `networks` encodings: [L, T, F] or [networks, L, T, F],
 // initialised uniform in +-1e-4 as Instant-NGP does.
 Tensor hash_grid_table(Graph& g, const std::string& name, const HashGridConfig& c,
