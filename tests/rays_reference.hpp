@@ -8,6 +8,9 @@
 
 #include "harness.hpp"
 #include "nova/camera.hpp"
+#include "nova/compose_spec.hpp"
+#include "nova/executor.hpp"
+#include "nova/rays.hpp"
 
 namespace nova::test {
 
@@ -107,6 +110,55 @@ inline std::array<double, 3> ref_instance_point(const std::array<double, 12>& m,
     r[2] = 1.0 + 2.0 * near / z;
   }
   return r;
+}
+
+// instance_points on `rows` points (drawn from `seed`) and 3 placed instances, NDC and metric,
+// against ref_instance_point. Points are kept at world depth in [-8, -1.2] (q_z <= 0.67): the
+// kernel works in float32 through a division by (q_z - 1) and back, which there loses < 1e-5
+// relative, so 1e-4 absolute on NDC values in [-2, 2].
+inline void check_instance_points(Runtime& rt, size_t rows, unsigned seed) {
+  const size_t B = 3;
+  const double ax = -1.7, ay = -2.2, near = 1.0;
+  const auto rnd = random_floats(rows * 3, -0.6f, 0.6f, seed);
+  std::vector<float> q(rows * 3);
+  for (size_t i = 0; i < rows; ++i) {
+    const double z = -1.2 - 6.8 * (0.5 + rnd[i * 3 + 2]) / 1.2;  // world depth in [-8, -1.2]
+    q[i * 3] = static_cast<float>(ax * (rnd[i * 3] * 2.0));
+    q[i * 3 + 1] = static_cast<float>(ay * (rnd[i * 3 + 1] * 2.0));
+    q[i * 3 + 2] = static_cast<float>(1.0 + 2.0 * near / z);
+  }
+  std::vector<float> xf;
+  std::vector<std::array<double, 12>> m;
+  for (size_t b = 0; b < B; ++b) {
+    ComposeInstance inst;
+    inst.rotate_deg = {10.0 * b, -20.0 + 5.0 * b, 3.0};
+    inst.translate = {0.1 * b, -0.05, 0.2 - 0.1 * b};
+    inst.pivot = {0.0, 0.1, -2.0};
+    m.push_back(instance_transform(inst));
+    for (double x : m.back()) xf.push_back(static_cast<float>(x));
+  }
+  for (bool ndc : {true, false}) {
+    Graph g;
+    Tensor pos = g.input("positions", Shape{rows, 3}), tr = g.input("transforms", Shape{B, 12});
+    InstanceOptions o;
+    o.ndc = ndc;
+    o.ax = static_cast<float>(ax);
+    o.ay = static_cast<float>(ay);
+    Tensor out = instance_points(pos, tr, o);
+    g.keep(out);
+    Executor ex(rt, g);
+    ex.set(pos, q);
+    ex.set(tr, xf);
+    ex.forward();
+    std::vector<double> want;
+    for (size_t b = 0; b < B; ++b)
+      for (size_t i = 0; i < rows; ++i) {
+        const auto r = ref_instance_point(m[b], {q[i * 3], q[i * 3 + 1], q[i * 3 + 2]}, ndc,
+                                          ax, ay, near);
+        want.insert(want.end(), r.begin(), r.end());
+      }
+    expect_close(ex.get(out), want, 1e-4, 1e-4, ndc ? "instance_points ndc" : "instance_points metric");
+  }
 }
 
 }  // namespace nova::test

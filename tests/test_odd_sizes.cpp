@@ -443,48 +443,8 @@ BOOST_AUTO_TEST_CASE(sampling) {
   expect_close(ex.get(s.positions[0]), pos0, 6e-5, 1e-6, "positions of group 0");
   expect_close(ex.get(s.positions[1]), pos1, 6e-5, 1e-6, "positions of group 1");
 
-  // instance_points: points at world depth in [-8, -1.2] as test_rays, 3 placed instances.
-  const size_t B = 3;
-  const double ax = -1.7, ay = -2.2, near = 1.0;
-  const auto rnd = random_floats(kRows * 3, -0.6f, 0.6f, 163);
-  std::vector<float> q(kRows * 3);
-  for (size_t i = 0; i < kRows; ++i) {
-    const double zw = -1.2 - 6.8 * (0.5 + rnd[i * 3 + 2]) / 1.2;
-    q[i * 3] = static_cast<float>(ax * (rnd[i * 3] * 2.0));
-    q[i * 3 + 1] = static_cast<float>(ay * (rnd[i * 3 + 1] * 2.0));
-    q[i * 3 + 2] = static_cast<float>(1.0 + 2.0 * near / zw);
-  }
-  std::vector<float> xf;
-  std::vector<std::array<double, 12>> m;
-  for (size_t b = 0; b < B; ++b) {
-    ComposeInstance inst;
-    inst.rotate_deg = {10.0 * b, -20.0 + 5.0 * b, 3.0};
-    inst.translate = {0.1 * b, -0.05, 0.2 - 0.1 * b};
-    inst.pivot = {0.0, 0.1, -2.0};
-    m.push_back(instance_transform(inst));
-    for (double x : m.back()) xf.push_back(static_cast<float>(x));
-  }
-  for (bool ndc : {true, false}) {
-    Graph gi;
-    Tensor pos = gi.input("positions", Shape{kRows, 3}), tr = gi.input("transforms", Shape{B, 12});
-    InstanceOptions io;
-    io.ndc = ndc;
-    io.ax = static_cast<float>(ax);
-    io.ay = static_cast<float>(ay);
-    Tensor out = instance_points(pos, tr, io);
-    gi.keep(out);
-    Executor exi(rt(), gi);
-    exi.set(pos, q);
-    exi.set(tr, xf);
-    exi.forward();
-    std::vector<double> want;
-    for (size_t b = 0; b < B; ++b)
-      for (size_t i = 0; i < kRows; ++i) {
-        const auto r = ref_instance_point(m[b], {q[i * 3], q[i * 3 + 1], q[i * 3 + 2]}, ndc, ax, ay, near);
-        want.insert(want.end(), r.begin(), r.end());
-      }
-    expect_close(exi.get(out), want, 1e-4, 1e-4, ndc ? "instance_points ndc" : "instance_points metric");
-  }
+  // instance_points: kRows points, 3 placed instances, as test_rays.
+  check_instance_points(rt(), kRows, 163);
 }
 
 // gemm.cl (the opt-in provider NOVA_GEMM=kernels): gemm_nn (1009 x 21 = A[1009, 5] B),

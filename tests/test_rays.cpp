@@ -228,55 +228,11 @@ BOOST_AUTO_TEST_CASE(rejects_bad_inputs) {
   BOOST_CHECK_THROW(stratified_samples(rays, bad_jitter, so), Error);
 }
 
-// instance_points against a float64 reference: NDC -> world -> rigid map -> NDC per
-// instance, and the plain map for metric rays. Odd sizes (no multiple of a work-group).
-// Tolerance: the kernel works in float32 through a division by (q_z - 1) and back; the
-// reference in float64. Points are kept at world depth in [-8, -1.2] (q_z <= 0.67), where
-// the float32 round trip loses < 1e-5 relative; 1e-4 absolute on NDC values in [-2, 2].
+// instance_points against a float64 reference (rays_reference.hpp states the tolerance):
+// NDC -> world -> rigid map -> NDC per instance, and the plain map for metric rays, on 37
+// points (no multiple of a work-group).
 BOOST_AUTO_TEST_CASE(instance_points_match_float64_reference) {
-  const size_t M = 37, B = 3;
-  const double ax = -1.7, ay = -2.2, near = 1.0;
-  std::vector<float> q(M * 3);
-  auto rnd = random_floats(M * 3, -0.6f, 0.6f, 11);
-  for (size_t i = 0; i < M; ++i) {
-    const double z = -1.2 - 6.8 * (0.5 + rnd[i * 3 + 2]) / 1.2;  // world depth in [-8, -1.2]
-    q[i * 3] = static_cast<float>(ax * (rnd[i * 3] * 2.0));
-    q[i * 3 + 1] = static_cast<float>(ay * (rnd[i * 3 + 1] * 2.0));
-    q[i * 3 + 2] = static_cast<float>(1.0 + 2.0 * near / z);
-  }
-  std::vector<float> xf;
-  std::vector<std::array<double, 12>> m;
-  for (size_t b = 0; b < B; ++b) {
-    ComposeInstance inst;
-    inst.rotate_deg = {10.0 * b, -20.0 + 5.0 * b, 3.0};
-    inst.translate = {0.1 * b, -0.05, 0.2 - 0.1 * b};
-    inst.pivot = {0.0, 0.1, -2.0};
-    m.push_back(instance_transform(inst));
-    for (double x : m.back()) xf.push_back(static_cast<float>(x));
-  }
-  for (bool ndc : {true, false}) {
-    Graph g;
-    Tensor pos = g.input("positions", Shape{M, 3}), tr = g.input("transforms", Shape{B, 12});
-    InstanceOptions o;
-    o.ndc = ndc;
-    o.ax = static_cast<float>(ax);
-    o.ay = static_cast<float>(ay);
-    Tensor out = instance_points(pos, tr, o);
-    g.keep(out);
-    Executor ex(runtime(), g);
-    ex.set(pos, q);
-    ex.set(tr, xf);
-    ex.forward();
-    const std::vector<float> got = ex.get(out);
-    std::vector<double> want;
-    for (size_t b = 0; b < B; ++b)
-      for (size_t i = 0; i < M; ++i) {
-        const auto r = ref_instance_point(m[b], {q[i * 3], q[i * 3 + 1], q[i * 3 + 2]}, ndc,
-                                          ax, ay, near);
-        want.insert(want.end(), r.begin(), r.end());
-      }
-    expect_close(got, want, 1e-4, 1e-4, ndc ? "instance_points ndc" : "instance_points metric");
-  }
+  check_instance_points(runtime(), 37, 11);
 }
 
 BOOST_AUTO_TEST_SUITE_END()
