@@ -12,6 +12,9 @@ using Args = std::vector<std::string>;
 
 int mlp(const Args& args);
 int render(const Args& args);
+#ifdef NOVA_BENCH_IO
+int tradeoff(const Args& args);  // needs nova_io (scenes, metrics, the plot)
+#endif
 
 struct Benchmark {
   const char* name;

@@ -13,6 +13,9 @@ const std::vector<Benchmark>& benchmarks() {
   static const std::vector<Benchmark> all = {
       {"mlp", "reference MLP forward / forward+backward, GEMMs beside a host BLAS", mlp},
       {"render", "compositing op forward / backward for 1 + K NeRFs beside a host loop", render},
+#ifdef NOVA_BENCH_IO
+      {"tradeoff", "trains a scene under several settings: PSNR against training time (CSV, PNG, speedup)", tradeoff},
+#endif
   };
   return all;
 }
