@@ -75,17 +75,66 @@ double host_blas_seconds(const std::vector<LayerShape>& shapes, size_t m, bool b
     }
   });
 }
+
+// One hidden layer's three GEMMs (forward X W, dX = dY W^T, dW = X^T dY) on the host BLAS:
+// seconds of each, median of `repeats`.
+std::vector<double> host_layer_seconds(size_t m, size_t w, int repeats) {
+  std::vector<float> x(m * w, 0.5f), y(m * w, 0.25f), wt(w * w, 0.01f), dw(w * w);
+  const int mm = static_cast<int>(m), ww = static_cast<int>(w);
+  return {time_median(repeats, [&] {
+            cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, mm, ww, ww, 1.0f, x.data(), ww,
+                        wt.data(), ww, 0.0f, y.data(), ww);
+          }),
+          time_median(repeats, [&] {
+            cblas_sgemm(CblasRowMajor, CblasNoTrans, CblasTrans, mm, ww, ww, 1.0f, y.data(), ww,
+                        wt.data(), ww, 0.0f, x.data(), ww);
+          }),
+          time_median(repeats, [&] {
+            cblas_sgemm(CblasRowMajor, CblasTrans, CblasNoTrans, ww, ww, mm, 1.0f, x.data(), ww,
+                        y.data(), ww, 0.0f, dw.data(), ww);
+          })};
+}
 #else
 std::string host_blas_name() { return "not built (no OpenBLAS)"; }
 double host_blas_seconds(const std::vector<LayerShape>&, size_t, bool, int) { return 0; }
+std::vector<double> host_layer_seconds(size_t, size_t, int) { return {0, 0, 0}; }
 #endif
+
+// The same three GEMMs of one w x w hidden layer through the device's GEMM provider.
+std::vector<double> device_layer_seconds(Runtime& rt, size_t m, size_t w, int repeats,
+                                         std::vector<std::string>& configs) {
+  Buffer x = rt.upload_floats(std::vector<float>(m * w, 0.5f));
+  Buffer y = rt.upload_floats(std::vector<float>(m * w, 0.25f));
+  Buffer wt = rt.upload_floats(std::vector<float>(w * w, 0.01f));
+  Buffer dw = rt.alloc(w * w * sizeof(float));
+  const std::vector<GemmArgs> gemms = {
+      {false, false, m, w, w, 1.0f, x.get(), w, m * w, wt.get(), w, w * w, 0.0f, y.get(), w, m * w, 1},
+      {false, true, m, w, w, 1.0f, y.get(), w, m * w, wt.get(), w, w * w, 0.0f, x.get(), w, m * w, 1},
+      {true, false, w, w, m, 1.0f, x.get(), w, m * w, y.get(), w, m * w, 0.0f, dw.get(), w, w * w, 1}};
+  std::vector<double> secs;
+  configs.clear();
+  for (const GemmArgs& g : gemms) {
+    Buffer temp;
+    if (size_t bytes = gemm_temp_bytes(rt, g)) temp = rt.alloc(bytes);
+    secs.push_back(time_median(repeats, [&] {
+      gemm(rt, g, temp.get());
+      rt.finish();
+    }));
+    const auto tuned = gemm_provider(rt) == GemmProvider::Tuned ? tuned_gemm_config(rt, g)
+                                                                 : std::nullopt;
+    configs.push_back(gemm_provider(rt) == GemmProvider::Kernels ? "kernels"
+                      : tuned                                     ? tuned->str()
+                                                                  : "clblast (table)");
+  }
+  return secs;
+}
 
 }  // namespace
 
 int mlp(const Args& args) {
   const Options o(args, {{"batches", "16384,65536"}, {"repeats", "3"}, {"device", ""},
                          {"width", "256"}, {"depth", "8"},
-                         {"gemm", "clblast"}});
+                         {"gemm", "tuned"}, {"layer", "256"}});
   if (o.help()) {
     std::cout << o.usage("nova-bench mlp");
     return 0;
@@ -98,8 +147,16 @@ int mlp(const Args& args) {
   if (c.skip >= c.depth) c.skip = -1;  // shallow networks have no skip connection
   const size_t in = 63;
   const auto shapes = layer_shapes(c, in);
+  size_t tuned_shapes = 0;
+  try {
+    tuned_shapes = reload_gemm_cache(rt);
+  } catch (const Error& e) {
+    std::cerr << "nova-bench: warning: " << e.what() << "\n";
+  }
   std::cout << "device " << rt.info().name << " (" << rt.info().type_name() << "), GEMM tuning "
-            << gemm_tuning_for(rt.info()).name << "; host BLAS: " << host_blas_name() << "\n"
+            << gemm_tuning_for(rt.info()).name << " + " << tuned_shapes
+            << " tuned shape classes from " << gemm_tuning_cache_path()
+            << "; host BLAS: " << host_blas_name() << "\n"
             << "network 63 -> " << c.depth << " x " << c.width << " (skip after layer " << c.skip
             << ") -> 4; median of " << repeats << " after a warm-up\n\n";
 
@@ -109,7 +166,8 @@ int mlp(const Args& args) {
     for (std::string name; std::getline(list, name, ',');) {
       if (name == "clblast") providers.push_back(GemmProvider::CLBlast);
       else if (name == "kernels") providers.push_back(GemmProvider::Kernels);
-      else throw Error("--gemm: '" + name + "' is not one of clblast, kernels");
+      else if (name == "tuned") providers.push_back(GemmProvider::Tuned);
+      else throw Error("--gemm: '" + name + "' is not one of tuned, clblast, kernels");
     }
   }
   std::ostringstream csv;
@@ -173,9 +231,49 @@ int mlp(const Args& args) {
       }
     }
   }
+  // The hidden w x w layer's GEMMs alone, device beside host BLAS in this run: the rate of
+  // issue 6's goal (device >= 0.5 of the host BLAS for the 256-wide layers).
+  const size_t lw = static_cast<size_t>(o.integer("layer"));
+  std::ostringstream layer_csv;
+  layer_csv << "gemm,batch,layer,fwd_gflops,dx_gflops,dw_gflops,layer_gflops,host_fwd_gflops,"
+               "host_dx_gflops,host_dw_gflops,host_layer_gflops,layer_over_host\n";
+  std::cout << "\nhidden " << lw << " x " << lw
+            << " layer GEMMs alone (forward X W, dX = dY W^T, dW = X^T dY), GFLOP/s:\n";
+  for (GemmProvider provider : providers) {
+    set_gemm_provider(rt, provider);
+    for (long batch_l : o.integers("batches")) {
+      const size_t m = static_cast<size_t>(batch_l);
+      std::vector<std::string> configs;
+      const auto dev = device_layer_seconds(rt, m, lw, repeats, configs);
+      const auto host = host_layer_seconds(m, lw, repeats);
+      const double one = 2.0 * m * lw * lw;
+      const double dev_all = 3 * one / (dev[0] + dev[1] + dev[2]);
+      const double host_all = host[0] > 0 ? 3 * one / (host[0] + host[1] + host[2]) : 0;
+      std::cout << std::fixed << std::setprecision(1) << "  " << std::left << std::setw(8)
+                << gemm_provider_name(provider) << std::setw(7) << m << std::right
+                << " device fwd " << one / dev[0] * 1e-9 << "  dX " << one / dev[1] * 1e-9
+                << "  dW " << one / dev[2] * 1e-9 << "  layer " << dev_all * 1e-9;
+      layer_csv << gemm_provider_name(provider) << "," << m << "," << lw << ","
+                << one / dev[0] * 1e-9 << "," << one / dev[1] * 1e-9 << ","
+                << one / dev[2] * 1e-9 << "," << dev_all * 1e-9;
+      if (host_all > 0) {
+        std::cout << " | host BLAS fwd " << one / host[0] * 1e-9 << "  dX "
+                  << one / host[1] * 1e-9 << "  dW " << one / host[2] * 1e-9 << "  layer "
+                  << host_all * 1e-9 << std::setprecision(3) << " | ratio "
+                  << dev_all / host_all << " (goal >= 0.5)";
+        layer_csv << "," << one / host[0] * 1e-9 << "," << one / host[1] * 1e-9 << ","
+                  << one / host[2] * 1e-9 << "," << host_all * 1e-9 << ","
+                  << dev_all / host_all << "\n";
+      } else {
+        layer_csv << ",,,,,\n";
+      }
+      std::cout << "\n    configurations: " << configs[0] << " | " << configs[1] << " | "
+                << configs[2] << std::endl;
+    }
+  }
   std::cout << "\n(device = the whole graph: GEMMs, bias + activation, concat, loss; host BLAS "
                "= the GEMMs alone)\n\n"
-            << profile << "\nCSV\n" << csv.str();
+            << profile << "\nCSV\n" << csv.str() << "\nCSV (layer GEMMs)\n" << layer_csv.str();
   return 0;
 }
 

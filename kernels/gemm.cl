@@ -88,3 +88,110 @@ __kernel void gemm_nn(__global const float* A, __global const float* B, __global
   __global float* c = C + (size_t)b * stride_c + (size_t)m * ldc + n0;
   for (uint j = 0; j < cols; ++j) c[j] = beta == 0.0f ? alpha * acc[j] : alpha * acc[j] + beta * c[j];
 }
+
+// gemm_blk: register-blocked GEMM with explicit float8 vectors (PoCL leaves explicit vector
+// code alone instead of vectorising across work-items; this is the textbook CPU micro-kernel).
+// Each work-item keeps a GEMM_RM x (8 GEMM_VN) block of C in registers; per k it loads GEMM_VN
+// vectors of op(B)'s row k and broadcasts GEMM_RM values of op(A)'s column k.
+// Dimension 0 runs over column blocks, so the work-items of one work-group share op(A)'s rows
+// (in L1) and sweep op(B) (in L2). op(A)[i, l] = A[i a_rs + l a_cs] covers A (a_rs = lda,
+// a_cs = 1) and A^T (a_rs = 1, a_cs = lda); op(B) is row-major (B^T goes through
+// gemm_transpose first).
+// Split reduction (the weight gradient, K = the batch): dimension 1 also runs over `splits`
+// chunks of kc values of k; with splits > 1 each chunk writes its partial block to P
+// (at float offset poff, [splits][batch][M][N]) and gemm_reduce adds the chunks in order (no atomics: the sum order
+// is fixed, runs are bit-reproducible).
+#ifndef GEMM_RM
+#define GEMM_RM 6
+#endif
+#ifndef GEMM_VN
+#define GEMM_VN 2
+#endif
+#define GEMM_BN (8 * GEMM_VN)
+
+__kernel void gemm_blk(__global const float* A, __global const float* B, __global float* C,
+                       __global float* P, uint poff, uint M, uint N, uint K, uint a_rs, uint a_cs, uint ldb,
+                       uint ldc, uint stride_a, uint stride_b, uint stride_c, uint batch,
+                       uint kc, uint splits, float alpha, float beta) {
+  const uint nb = get_global_id(0), job = get_global_id(1);
+  const uint nblocks = (N + GEMM_BN - 1) / GEMM_BN, mblocks = (M + GEMM_RM - 1) / GEMM_RM;
+  if (nb >= nblocks || job >= mblocks * batch * splits) return;
+  // The chunk varies slowest, so work-groups running at once share a chunk of A and B.
+  const uint s = job / (mblocks * batch), rest = job % (mblocks * batch);
+  const uint b = rest / mblocks, m0 = (rest % mblocks) * GEMM_RM, n0 = nb * GEMM_BN;
+  const uint k0 = s * kc, k1 = min(K, k0 + kc);
+  __global const float* a = A + (size_t)b * stride_a + (size_t)m0 * a_rs + (size_t)k0 * a_cs;
+  __global const float* bp = B + (size_t)b * stride_b + (size_t)k0 * ldb + n0;
+  __global float* c;
+  float cscale = alpha, cbeta = beta;
+  uint ldo = ldc;
+  if (splits > 1) {  // partial sums: plain stores, alpha and beta applied by gemm_reduce
+    c = P + poff + (((size_t)s * batch + b) * M + m0) * N + n0;
+    cscale = 1.0f;
+    cbeta = 0.0f;
+    ldo = N;
+  } else {
+    c = C + (size_t)b * stride_c + (size_t)m0 * ldc + n0;
+  }
+  const uint rows = min((uint)GEMM_RM, M - m0), cols = min((uint)GEMM_BN, N - n0);
+  if (rows == GEMM_RM && cols == GEMM_BN) {
+    float8 acc[GEMM_RM][GEMM_VN];
+#pragma unroll
+    for (uint i = 0; i < GEMM_RM; ++i)
+#pragma unroll
+      for (uint j = 0; j < GEMM_VN; ++j) acc[i][j] = (float8)(0.0f);
+    for (uint k = k0; k < k1; ++k) {
+      float8 bv[GEMM_VN];
+#pragma unroll
+      for (uint j = 0; j < GEMM_VN; ++j) bv[j] = vload8(j, bp);
+#pragma unroll
+      for (uint i = 0; i < GEMM_RM; ++i) {
+        const float8 av = (float8)(a[(size_t)i * a_rs]);
+#pragma unroll
+        for (uint j = 0; j < GEMM_VN; ++j) acc[i][j] = fma(av, bv[j], acc[i][j]);
+      }
+      a += a_cs;
+      bp += ldb;
+    }
+#pragma unroll
+    for (uint i = 0; i < GEMM_RM; ++i)
+#pragma unroll
+      for (uint j = 0; j < GEMM_VN; ++j) {
+        __global float* o = c + (size_t)i * ldo;
+        const float8 r = cscale * acc[i][j];
+        vstore8(cbeta == 0.0f ? r : r + cbeta * vload8(j, o), j, o);
+      }
+  } else {  // a ragged edge block: scalar, one column at a time
+    for (uint j = 0; j < cols; ++j) {
+      float acc[GEMM_RM];
+      for (uint i = 0; i < GEMM_RM; ++i) acc[i] = 0.0f;
+      __global const float* aa = a;
+      __global const float* bb = bp + j;
+      for (uint k = k0; k < k1; ++k) {
+        const float bk = *bb;
+        for (uint i = 0; i < rows; ++i) acc[i] = fma(aa[(size_t)i * a_rs], bk, acc[i]);
+        aa += a_cs;
+        bb += ldb;
+      }
+      for (uint i = 0; i < rows; ++i) {
+        __global float* o = c + (size_t)i * ldo + j;
+        *o = cbeta == 0.0f ? cscale * acc[i] : cscale * acc[i] + cbeta * *o;
+      }
+    }
+  }
+}
+
+// C[b] = alpha sum_s P[s][b] + beta C[b], the chunks added in order s = 0, 1, ...
+__kernel void gemm_reduce(__global const float* P, uint poff, __global float* C, uint M, uint N,
+                          uint ldc, uint stride_c, uint batch, uint splits, float alpha,
+                          float beta) {
+  const uint n = get_global_id(0), job = get_global_id(1);
+  if (n >= N || job >= M * batch) return;
+  const uint b = job / M, m = job % M;
+  const size_t plane = (size_t)batch * M * N;
+  __global const float* p = P + poff + ((size_t)b * M + m) * N + n;
+  float s = 0.0f;
+  for (uint i = 0; i < splits; ++i) s += p[i * plane];
+  __global float* c = C + (size_t)b * stride_c + (size_t)m * ldc + n;
+  *c = beta == 0.0f ? alpha * s : alpha * s + beta * *c;
+}

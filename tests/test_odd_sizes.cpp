@@ -449,7 +449,8 @@ BOOST_AUTO_TEST_CASE(sampling) {
 
 // gemm.cl (the opt-in provider NOVA_GEMM=kernels): gemm_nn (1009 x 21 = A[1009, 5] B),
 // gemm_tn (A^T B, 3 batches of 13 x 1009) and gemm_transpose + gemm_nn (A B^T, 3 batches of
-// 11 x 999), with alpha and beta != 0, against float64 products. Tolerance as test_ops'
+// 11 x 999), with alpha and beta != 0, against float64 products; the same three through the
+// blocked kernel (gemm_blk, gemm_reduce for split reductions). Tolerance as test_ops'
 // linear: k <= 7 products of values in [-1, 1], |err| < 1e-5.
 BOOST_AUTO_TEST_CASE(own_gemm_kernels) {
   Runtime& r = rt();
@@ -470,10 +471,23 @@ BOOST_AUTO_TEST_CASE(own_gemm_kernels) {
       const float alpha = 0.5f, beta = 0.25f;
       GemmArgs g{c.ta, c.tb, c.m, c.n, c.k, alpha, da.get(), c.ta ? c.m : c.k, sa, db.get(),
                  c.tb ? c.k : c.n, sb, beta, dc.get(), c.n, sc, c.batch};
-      Buffer temp;
-      if (size_t bytes = gemm_temp_bytes(r, g)) temp = r.alloc(bytes);
-      gemm(r, g, temp.get());
-      const auto got = r.download_floats(dc.get(), c.batch * sc);
+      std::vector<std::vector<float>> results;
+      {
+        Buffer temp;
+        if (size_t bytes = gemm_temp_bytes(r, g)) temp = r.alloc(bytes);
+        gemm(r, g, temp.get());
+        results.push_back(r.download_floats(dc.get(), c.batch * sc));
+      }
+      // The blocked kernel (gemm_blk), with a split reduction (gemm_reduce) of ragged chunks
+      // and A^T packed first (gemm_transpose) where A is transposed.
+      for (const char* text : {"blocked RM=6 VN=2 KC=3 TA=1", "blocked RM=4 VN=1 KC=2"}) {
+        r.upload(dc.get(), c0.data(), c0.size() * sizeof(float));
+        const GemmConfig cfg = GemmConfig::parse(text);
+        Buffer temp;
+        if (size_t bytes = gemm_temp_bytes_with(r, cfg, g)) temp = r.alloc(bytes);
+        gemm_with(r, cfg, g, temp.get());
+        results.push_back(r.download_floats(dc.get(), c.batch * sc));
+      }
       std::vector<double> want(c.batch * sc);
       for (size_t p = 0; p < c.batch; ++p)
         for (size_t i = 0; i < c.m; ++i)
@@ -486,7 +500,7 @@ BOOST_AUTO_TEST_CASE(own_gemm_kernels) {
             }
             want[p * sc + i * c.n + j] = alpha * s + beta * double(c0[p * sc + i * c.n + j]);
           }
-      expect_close(got, want, 1e-5, 0, "own gemm kernels");
+      for (const auto& got : results) expect_close(got, want, 1e-5, 0, "own gemm kernels");
     }
   }
   set_gemm_provider(r, before);

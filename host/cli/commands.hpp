@@ -15,6 +15,7 @@ int synth(const Args& args);
 int train(const Args& args);
 int render(const Args& args);
 int eval(const Args& args);
+int tune(const Args& args);
 
 struct Command {
   const char* name;

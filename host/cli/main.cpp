@@ -20,6 +20,7 @@ const std::vector<Command>& commands() {
       {"train", "train a NOVA scene (static pretraining, then joint with augmentation)", train},
       {"render", "render a trained run: any camera, any time, compositions of objects", render},
       {"eval", "PSNR and SSIM of a trained run against the scene's ground truth", eval},
+      {"tune", "search GEMM configurations for this device and update the tuning cache", tune},
   };
   return all;
 }

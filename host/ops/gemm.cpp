@@ -1,15 +1,24 @@
-// The GEMM providers: CLBlast, and nova's own kernels for CPU devices (kernels/gemm.cl).
+// The GEMM providers: CLBlast (table or explicit Xgemm parameters), nova's first own kernels
+// and the register-blocked kernel (kernels/gemm.cl), and the dispatch by the tuning cache.
 #include "nova/gemm.hpp"
 
 #include <clblast.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <mutex>
+#include <sstream>
 
 #include "op_util.hpp"
 
 namespace nova {
+
+// gemm_tuning.cpp: CLBlast's Xgemm parameters for an explicit configuration (the table's
+// when cfg.params is empty), applied under clblast_mutex() before a CLBlast call.
+void apply_clblast_config(Runtime& rt, const GemmConfig& cfg);
+std::mutex& clblast_mutex();
+
 namespace {
 
 std::mutex provider_mutex;
@@ -18,17 +27,28 @@ std::map<cl_device_id, GemmProvider> providers;  // chosen or forced, per device
 GemmProvider default_provider() {
   if (const char* env = std::getenv("NOVA_GEMM"); env && *env) {
     const std::string v = env;
+    if (v == "tuned") return GemmProvider::Tuned;
     if (v == "clblast") return GemmProvider::CLBlast;
     if (v == "kernels") return GemmProvider::Kernels;
-    throw Error("NOVA_GEMM='" + v + "' is not one of clblast, kernels");
+    throw Error("NOVA_GEMM='" + v + "' is not one of tuned, clblast, kernels");
   }
-  return GemmProvider::CLBlast;  // the own kernels do not beat it yet (gemm.hpp)
+  return GemmProvider::Tuned;
 }
 
 bool own_kernels_fit(const GemmArgs& g) { return !(g.trans_a && g.trans_b); }
 
 // Floats of scratch the own kernels need: B^T when B is transposed.
 size_t own_temp_floats(const GemmArgs& g) { return g.trans_b ? g.batch * g.k * g.n : 0; }
+
+// T = B^T for op(B) = B^T (B stored [n, k]); returns T's leading dimension and stride.
+void transpose_b(Runtime& rt, const GemmArgs& g, cl_mem t) {
+  using detail::u32;
+  rt.launch("gemm", "gemm_transpose")
+      .arg(g.b).arg(t).arg(u32(g.n, "gemm n")).arg(u32(g.k, "gemm k"))
+      .arg(u32(g.ldb, "gemm ldb")).arg(u32(g.stride_b, "gemm stride_b"))
+      .arg(u32(g.batch, "gemm batch"))
+      .run2(g.n, g.k * g.batch);
+}
 
 void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
   using detail::u32;
@@ -40,11 +60,7 @@ void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
       scratch = rt.alloc(own_temp_floats(g) * sizeof(float));
       temp = scratch.get();
     }
-    rt.launch("gemm", "gemm_transpose")
-        .arg(g.b).arg(temp).arg(u32(g.n, "gemm n")).arg(u32(g.k, "gemm k"))
-        .arg(u32(g.ldb, "gemm ldb")).arg(u32(g.stride_b, "gemm stride_b"))
-        .arg(u32(g.batch, "gemm batch"))
-        .run2(g.n, g.k * g.batch);
+    transpose_b(rt, g, temp);
     b = temp;
     ldb = g.n;
     stride_b = g.k * g.n;
@@ -62,6 +78,119 @@ void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
       .run2(items0, blocks * g.batch);
 }
 
+// ---- the register-blocked kernel (gemm_blk) ------------------------------------------------
+struct Blocked {
+  size_t rm = 6, vn = 2, kc = 0;  // rows and float8 vectors per work-item; split chunk
+  size_t ta = 0;  // 1: op(A) = A^T is transposed into the scratch first (rows contiguous)
+};
+
+Blocked blocked_params(const GemmConfig& c) {
+  Blocked b;
+  for (const auto& [key, v] : c.params) {
+    if (key == "RM") b.rm = v;
+    else if (key == "VN") b.vn = v;
+    else if (key == "KC") b.kc = v;
+    else if (key == "TA") b.ta = v;
+    else throw Error("GEMM configuration '" + c.str() + "': unknown parameter " + key);
+  }
+  if (b.rm < 1 || b.rm > 16 || b.vn < 1 || b.vn > 4 || b.ta > 1)
+    throw Error("GEMM configuration '" + c.str() + "': RM must be 1..16, VN 1..4, TA 0 or 1");
+  return b;
+}
+
+size_t blocked_splits(const GemmArgs& g, const Blocked& p) {
+  return p.kc == 0 || g.k <= p.kc ? 1 : (g.k + p.kc - 1) / p.kc;
+}
+
+// Floats of A^T in the scratch (TA=1 with op(A) = A^T).
+size_t blocked_at_floats(const GemmArgs& g, const Blocked& p) {
+  return p.ta && g.trans_a ? g.batch * g.m * g.k : 0;
+}
+
+// B^T first (when op(B) = B^T), then A^T (TA=1), then the partial sums of a split reduction.
+size_t blocked_temp_floats(const GemmArgs& g, const Blocked& p) {
+  const size_t splits = blocked_splits(g, p);
+  return own_temp_floats(g) + blocked_at_floats(g, p) +
+         (splits > 1 ? splits * g.batch * g.m * g.n : 0);
+}
+
+// Launches with a work-group of at most 16 column blocks x (64 / that) row blocks: small
+// enough that a CPU device gets many groups to share among its threads.
+void enqueue2(Runtime& rt, cl_kernel kernel, size_t n0, size_t n1, size_t max0) {
+  const size_t wg = std::min<size_t>(64, rt.work_group_size(kernel));
+  const size_t* max_items = rt.info().max_work_item_sizes;
+  size_t l0 = 1;
+  while (l0 < n0 && l0 * 2 <= max0 && l0 * 2 <= wg && l0 * 2 <= max_items[0]) l0 *= 2;
+  size_t l1 = 1;
+  while (l1 < n1 && l0 * l1 * 2 <= wg && l1 * 2 <= max_items[1]) l1 *= 2;
+  const size_t local[2] = {l0, l1};
+  const size_t global[2] = {(n0 + l0 - 1) / l0 * l0, (n1 + l1 - 1) / l1 * l1};
+  const size_t size[2] = {n0, n1};
+  rt.note_launch(kernel, 2, size, local);
+  cl_check(clEnqueueNDRangeKernel(rt.queue(), kernel, 2, nullptr, global, local, 0, nullptr,
+                                  nullptr),
+           "clEnqueueNDRangeKernel(gemm_blk)");
+}
+
+void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
+  using detail::u32;
+  const Blocked p = blocked_params(cfg);
+  if (g.trans_a && g.trans_b) throw Error("blocked GEMM: A^T B^T is not supported");
+  const size_t splits = blocked_splits(g, p);
+  Buffer scratch;
+  if (const size_t floats = blocked_temp_floats(g, p); floats && !temp) {
+    scratch = rt.alloc(floats * sizeof(float));
+    temp = scratch.get();
+  }
+  cl_mem b = g.b;
+  size_t ldb = g.ldb, stride_b = g.stride_b;
+  if (g.trans_b) {
+    transpose_b(rt, g, temp);
+    b = temp;
+    ldb = g.n;
+    stride_b = g.k * g.n;
+  }
+  const std::string options =
+      "-DGEMM_RM=" + std::to_string(p.rm) + " -DGEMM_VN=" + std::to_string(p.vn);
+  cl_mem a = g.a;
+  size_t a_rs = g.trans_a ? 1 : g.lda, a_cs = g.trans_a ? g.lda : 1, stride_a = g.stride_a;
+  size_t poff = own_temp_floats(g);
+  if (const size_t at = blocked_at_floats(g, p)) {
+    // A stored [k, m] (leading dimension lda): its transpose [m, k] at the start of the
+    // scratch (no B^T region: A^T B^T is refused above).
+    rt.launch("gemm", "gemm_transpose")
+        .arg(g.a).arg(temp).arg(u32(g.k, "gemm k")).arg(u32(g.m, "gemm m"))
+        .arg(u32(g.lda, "gemm lda")).arg(u32(g.stride_a, "gemm stride_a"))
+        .arg(u32(g.batch, "gemm batch"))
+        .run2(g.k, g.m * g.batch);
+    a = temp;
+    a_rs = g.k;
+    a_cs = 1;
+    stride_a = g.m * g.k;
+    poff += at;
+  }
+  cl_kernel kernel = rt.kernel("gemm", "gemm_blk", options);
+  const size_t kc = splits > 1 ? p.kc : std::max<size_t>(g.k, 1);
+  Launch(rt, kernel)
+      .arg(a).arg(b).arg(g.c).arg(splits > 1 ? temp : g.c).arg(u32(poff, "gemm partials"))
+      .arg(u32(g.m, "gemm m")).arg(u32(g.n, "gemm n")).arg(u32(g.k, "gemm k"))
+      .arg(u32(a_rs, "gemm lda")).arg(u32(a_cs, "gemm lda"))
+      .arg(u32(ldb, "gemm ldb")).arg(u32(g.ldc, "gemm ldc"))
+      .arg(u32(stride_a, "gemm stride_a")).arg(u32(stride_b, "gemm stride_b"))
+      .arg(u32(g.stride_c, "gemm stride_c")).arg(u32(g.batch, "gemm batch"))
+      .arg(u32(kc, "gemm kc")).arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta);
+  const size_t bn = 8 * p.vn;
+  enqueue2(rt, kernel, (g.n + bn - 1) / bn, (g.m + p.rm - 1) / p.rm * g.batch * splits, 16);
+  if (splits > 1)
+    rt.launch("gemm", "gemm_reduce", options)
+        .arg(temp).arg(u32(poff, "gemm partials")).arg(g.c).arg(u32(g.m, "gemm m"))
+        .arg(u32(g.n, "gemm n")).arg(u32(g.ldc, "gemm ldc"))
+        .arg(u32(g.stride_c, "gemm stride_c")).arg(u32(g.batch, "gemm batch"))
+        .arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta)
+        .run2(g.n, g.m * g.batch);
+}
+
+// ---- CLBlast --------------------------------------------------------------------------------
 clblast::Transpose tr(bool t) { return t ? clblast::Transpose::kYes : clblast::Transpose::kNo; }
 
 void check(clblast::StatusCode st, const char* what, const GemmArgs& g) {
@@ -73,28 +202,9 @@ void check(clblast::StatusCode st, const char* what, const GemmArgs& g) {
               kExitInternal);
 }
 
-}  // namespace
-
-const char* gemm_provider_name(GemmProvider p) {
-  return p == GemmProvider::Kernels ? "kernels" : "clblast";
-}
-
-GemmProvider gemm_provider(Runtime& rt) {
-  std::lock_guard<std::mutex> lock(provider_mutex);
-  auto it = providers.find(rt.device());
-  if (it == providers.end()) it = providers.emplace(rt.device(), default_provider()).first;
-  return it->second;
-}
-
-void set_gemm_provider(Runtime& rt, GemmProvider p) {
-  std::lock_guard<std::mutex> lock(provider_mutex);
-  providers[rt.device()] = p;
-}
-
-void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
-  if (g.m == 0 || g.n == 0 || g.batch == 0) return;
-  if (gemm_provider(rt) == GemmProvider::Kernels && own_kernels_fit(g)) return own_gemm(rt, g, temp);
-  configure_gemm(rt);
+void clblast_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
+  std::lock_guard<std::mutex> lock(clblast_mutex());
+  apply_clblast_config(rt, cfg);
   if (g.batch == 1) {
     check(clblast::Gemm(clblast::Layout::kRowMajor, tr(g.trans_a), tr(g.trans_b), g.m, g.n, g.k,
                         g.alpha, g.a, 0, g.lda, g.b, 0, g.ldb, g.beta, g.c, 0, g.ldc,
@@ -109,17 +219,145 @@ void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
   }
 }
 
-size_t gemm_temp_bytes(Runtime& rt, const GemmArgs& g) {
-  if (gemm_provider(rt) == GemmProvider::Kernels && own_kernels_fit(g))
-    return own_temp_floats(g) * sizeof(float);
+size_t clblast_temp_bytes(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g) {
   if (g.batch != 1) return 0;  // the batched routine allocates its own scratch
-  configure_gemm(rt);
+  std::lock_guard<std::mutex> lock(clblast_mutex());
+  apply_clblast_config(rt, cfg);
   size_t bytes = 0;
   check(clblast::GemmTempBufferSize<float>(clblast::Layout::kRowMajor, tr(g.trans_a),
                                            tr(g.trans_b), g.m, g.n, g.k, 0, g.lda, 0, g.ldb, 0,
                                            g.ldc, rt.queue_ptr(), bytes),
         "clblast::GemmTempBufferSize", g);
   return bytes;
+}
+
+const GemmConfig& table_config() {
+  static const GemmConfig c;  // "clblast" without parameters: the device's table entry
+  return c;
+}
+
+// The configuration a call runs with under the runtime's provider.
+GemmConfig choose(Runtime& rt, const GemmArgs& g) {
+  switch (gemm_provider(rt)) {
+    case GemmProvider::Kernels:
+      if (own_kernels_fit(g)) return GemmConfig{"kernels", {}};
+      return table_config();
+    case GemmProvider::Tuned:
+      if (auto c = tuned_gemm_config(rt, g)) return *c;
+      return table_config();
+    case GemmProvider::CLBlast:
+      break;
+  }
+  return table_config();
+}
+
+}  // namespace
+
+const char* gemm_provider_name(GemmProvider p) {
+  switch (p) {
+    case GemmProvider::Kernels: return "kernels";
+    case GemmProvider::CLBlast: return "clblast";
+    case GemmProvider::Tuned: break;
+  }
+  return "tuned";
+}
+
+GemmProvider gemm_provider(Runtime& rt) {
+  std::lock_guard<std::mutex> lock(provider_mutex);
+  auto it = providers.find(rt.device());
+  if (it == providers.end()) it = providers.emplace(rt.device(), default_provider()).first;
+  return it->second;
+}
+
+void set_gemm_provider(Runtime& rt, GemmProvider p) {
+  std::lock_guard<std::mutex> lock(provider_mutex);
+  providers[rt.device()] = p;
+}
+
+std::string GemmConfig::str() const {
+  std::string s = provider;
+  for (const auto& [k, v] : params) s += " " + k + "=" + std::to_string(v);
+  return s;
+}
+
+GemmConfig GemmConfig::parse(const std::string& text) {
+  std::istringstream in(text);
+  GemmConfig c;
+  if (!(in >> c.provider) ||
+      (c.provider != "clblast" && c.provider != "kernels" && c.provider != "blocked"))
+    throw Error("'" + text + "' is no GEMM configuration (clblast|kernels|blocked KEY=VALUE...)");
+  for (std::string item; in >> item;) {
+    const size_t eq = item.find('=');
+    size_t used = 0;
+    unsigned long long v = 0;
+    try {
+      if (eq == std::string::npos || eq == 0) throw std::invalid_argument(item);
+      v = std::stoull(item.substr(eq + 1), &used);
+    } catch (const std::exception&) {
+      used = std::string::npos;
+    }
+    if (used != item.size() - eq - 1 || item[eq + 1] == '-')
+      throw Error("'" + text + "': '" + item + "' is not KEY=unsigned integer");
+    c.params[item.substr(0, eq)] = static_cast<size_t>(v);
+  }
+  if (c.provider == "kernels" && !c.params.empty())
+    throw Error("'" + text + "': the kernels provider takes no parameters");
+  if (c.provider == "blocked") blocked_params(c);  // validates
+  return c;
+}
+
+void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
+  if (g.m == 0 || g.n == 0 || g.batch == 0) return;
+  configure_gemm(rt);
+  if (cfg.provider == "kernels") {
+    if (!own_kernels_fit(g)) throw Error("own GEMM kernels: A^T B^T is not supported");
+    return own_gemm(rt, g, temp);
+  }
+  if (cfg.provider == "blocked") return blocked_gemm(rt, cfg, g, temp);
+  if (cfg.provider == "clblast") return clblast_gemm(rt, cfg, g, temp);
+  throw Error("unknown GEMM provider '" + cfg.provider + "'");
+}
+
+size_t gemm_temp_bytes_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g) {
+  configure_gemm(rt);
+  if (cfg.provider == "kernels") return own_temp_floats(g) * sizeof(float);
+  if (cfg.provider == "blocked") return blocked_temp_floats(g, blocked_params(cfg)) * sizeof(float);
+  return clblast_temp_bytes(rt, cfg, g);
+}
+
+void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
+  if (g.m == 0 || g.n == 0 || g.batch == 0) return;
+  configure_gemm(rt);
+  const GemmConfig cfg = choose(rt, g);
+  // The workspace was sized for the shape a graph was planned with; a call with fewer rows
+  // may fall into another shape class with another configuration. A workspace too small for
+  // it is not used: the provider allocates its own scratch (CLBlast does the same).
+  if (temp) {
+    size_t have = 0;
+    cl_check(clGetMemObjectInfo(temp, CL_MEM_SIZE, sizeof(have), &have, nullptr),
+             "clGetMemObjectInfo(gemm temp)");
+    if (have < gemm_temp_bytes_with(rt, cfg, g)) temp = nullptr;
+  }
+  gemm_with(rt, cfg, g, temp);
+}
+
+size_t gemm_temp_bytes(Runtime& rt, const GemmArgs& g) {
+  configure_gemm(rt);
+  return gemm_temp_bytes_with(rt, choose(rt, g), g);
+}
+
+std::optional<GemmShapeClass> gemm_shape_class(const GemmArgs& g) {
+  if (g.trans_a && g.trans_b) return std::nullopt;
+  size_t long_dim = g.trans_a ? g.k : g.m;
+  if (long_dim < kGemmTunedMinRows) return std::nullopt;
+  size_t p = 1;
+  while (p * 2 <= long_dim) p *= 2;
+  const char* kind = g.trans_a ? "tn" : g.trans_b ? "nt" : "nn";
+  return GemmShapeClass{kind, g.trans_a ? g.m : p, g.n, g.trans_a ? p : g.k};
+}
+
+std::string GemmShapeClass::str() const {
+  return kind + " " + std::to_string(m) + "x" + std::to_string(n) + "x" + std::to_string(k);
 }
 
 }  // namespace nova
