@@ -338,8 +338,6 @@ inline Image8 plot(const std::vector<Series>& series, const std::string& title, 
   }
   if (std::isfinite(level)) {
     for (int x = left; x < right; x += 12) cv::line(img, {x, py(level)}, {std::min(x + 6, right), py(level)}, black, 1);
-    cv::putText(img, "equal-PSNR level " + fmt(level, 2) + " dB", {left + 8, py(level) - 6}, font, 0.45, black, 1,
-                cv::LINE_AA);
   }
 
   for (size_t i = 0; i < series.size(); ++i) {
@@ -355,14 +353,17 @@ inline Image8 plot(const std::vector<Series>& series, const std::string& title, 
         cv::rectangle(img, {p.x - 4, p.y - 4}, {p.x + 4, p.y + 4}, c, cv::FILLED);
     }
   }
-  // Legend, bottom right (the curves rise to the top left).
+  // Legend, bottom right (the curves rise to the top left), with the level's dashed line.
+  const std::string level_label = std::isfinite(level) ? "equal-PSNR level " + fmt(level, 2) + " dB" : "";
   int lw = 0, lh = 0, base = 0;
   for (const Series& s : series) {
     const cv::Size sz = cv::getTextSize(s.label, font, 0.45, 1, &base);
     lw = std::max(lw, sz.width);
     lh = std::max(lh, sz.height + base);
   }
-  const int row = std::max(lh, 12) + 6, bw = lw + 50, bh = row * static_cast<int>(series.size()) + 10;
+  if (!level_label.empty()) lw = std::max(lw, cv::getTextSize(level_label, font, 0.45, 1, &base).width);
+  const int rows = static_cast<int>(series.size()) + (level_label.empty() ? 0 : 1);
+  const int row = std::max(lh, 12) + 6, bw = lw + 50, bh = row * rows + 10;
   const int bx = right - bw - 10, by = bottom - bh - 10;
   if (!series.empty() && bx > left && by > top) {
     cv::rectangle(img, {bx, by}, {bx + bw, by + bh}, cv::Scalar(255, 255, 255), cv::FILLED);
@@ -373,6 +374,11 @@ inline Image8 plot(const std::vector<Series>& series, const std::string& title, 
       cv::line(img, {bx + 8, y}, {bx + 36, y}, c, 2, cv::LINE_AA);
       cv::circle(img, {bx + 22, y}, 4, c, cv::FILLED, cv::LINE_AA);
       cv::putText(img, series[i].label, {bx + 44, y + lh / 2 - base}, font, 0.45, black, 1, cv::LINE_AA);
+    }
+    if (!level_label.empty()) {
+      const int y = by + 5 + row * static_cast<int>(series.size()) + row / 2;
+      for (int x = bx + 8; x < bx + 36; x += 12) cv::line(img, {x, y}, {std::min(x + 6, bx + 36), y}, black, 1);
+      cv::putText(img, level_label, {bx + 44, y + lh / 2 - base}, font, 0.45, black, 1, cv::LINE_AA);
     }
   }
   Image8 out(width, height, 3);
