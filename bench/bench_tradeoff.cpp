@@ -52,8 +52,8 @@ constexpr const char* kUsage =
     "                     times B; default 1), or seconds of training per setting, e.g. 300s\n"
     "  --segments N       evaluations over joint training (default 6), plus step 0 and the end of\n"
     "                     pretraining; with a seconds budget, N equal slices of it\n"
-    "  --setting SPEC     NAME:KEY=VALUE,KEY=VALUE (nova train options, and gemm=clblast|kernels for\n"
-    "                     the GEMM provider, as NOVA_GEMM); repeat for several; replaces the defaults\n"
+    "  --setting SPEC     NAME:KEY=VALUE,KEY=VALUE (nova train options, and gemm=tuned|clblast|kernels\n"
+    "                     for the GEMM mode, as NOVA_GEMM); repeat for several; replaces the defaults\n"
     "  --settings FILE    one SPEC a line ('#' comments); 'default' is the built-in list\n"
     "  --base KEY=V,...   nova train options applied to every setting before its own\n"
     "  --preset P         the preset every setting starts from (default quick)\n"
@@ -73,7 +73,7 @@ constexpr const char* kUsage =
 struct Planned {
   Setting setting;
   TrainConfig config;
-  std::string gemm;     // resolved: clblast or kernels
+  std::string gemm;     // resolved: tuned, clblast or kernels
   std::string same_as;  // an earlier setting with the same configuration, trained once
 };
 
@@ -87,8 +87,9 @@ struct RunResult {
 std::string env_gemm() {
   const char* e = std::getenv("NOVA_GEMM");
   const std::string v = e ? e : "";
-  if (v.empty()) return "clblast";
-  if (v != "clblast" && v != "kernels") throw Error("NOVA_GEMM='" + v + "' is not one of clblast, kernels");
+  if (v.empty()) return "tuned";
+  if (v != "tuned" && v != "clblast" && v != "kernels")
+    throw Error("NOVA_GEMM='" + v + "' is not one of tuned, clblast, kernels");
   return v;
 }
 
@@ -156,7 +157,9 @@ RunResult run_setting(const Planned& pl, const Scene& scene, const DeviceInfo& d
   RunResult r;
   const TrainConfig& c = pl.config;
   Runtime rt(device, false);
-  set_gemm_provider(rt, pl.gemm == "kernels" ? GemmProvider::Kernels : GemmProvider::CLBlast);
+  set_gemm_provider(rt, pl.gemm == "kernels"   ? GemmProvider::Kernels
+                        : pl.gemm == "clblast" ? GemmProvider::CLBlast
+                                               : GemmProvider::Tuned);
   if (warmup) {
     // Builds every kernel and GEMM program both phases use (PoCL compiles a new CLBlast
     // program in 18-35 s), so that compiles do not count as training time.
@@ -390,6 +393,12 @@ int tradeoff(const Args& raw_args) {
                               : "x" + fmt(budget.scale, 3) + " of the schedule")
        << ", " << segments << " segments, " << (eval_count ? std::to_string(eval_count) : std::string("all"))
        << " camera-0 views per evaluation, device " << device.name << "\n";
+  {
+    const std::string cache = gemm_tuning_cache_path();
+    head << "GEMM tuning cache (gemm=tuned): " << (cache.empty() ? "none" : cache)
+         << (!cache.empty() && fs::exists(cache) ? "" : " (missing: tuned runs the table's CLBlast; run nova tune first)")
+         << "\n";
+  }
   std::cout << head.str();
   int distinct = 0;
   long distinct_steps = 0;

@@ -29,7 +29,7 @@ namespace nova::tradeoff {
 struct Setting {
   std::string name;
   std::vector<std::pair<std::string, std::string>> overrides;  // nova train key = value, in order
-  std::string gemm;  // "clblast", "kernels", or "" (the process default: NOVA_GEMM, else CLBlast)
+  std::string gemm;  // "tuned", "clblast", "kernels", or "" (the process default: NOVA_GEMM, else tuned)
 };
 
 inline std::string trim(const std::string& s) {
@@ -40,7 +40,8 @@ inline std::string trim(const std::string& s) {
 
 // "NAME[:KEY=VALUE[,KEY=VALUE...]]". NAME: letters, digits, '.', '_', '+', '-' (it names a
 // run folder and a CSV field). KEY: a `nova train` option (checked later, against the build:
-// see unknown_keys) or `gemm` / `NOVA_GEMM` with the value clblast or kernels. Error (exit 2)
+// see unknown_keys) or `gemm` / `NOVA_GEMM` with the value tuned, clblast or kernels (the
+// GEMM modes of include/nova/gemm.hpp). Error (exit 2)
 // naming the setting on anything else.
 inline Setting parse_setting(const std::string& text, const std::string& origin = "--setting") {
   const std::string spec = trim(text);
@@ -66,8 +67,8 @@ inline Setting parse_setting(const std::string& text, const std::string& origin 
     if (key.empty() || value.empty()) throw bad("'" + item + "' is not KEY=VALUE");
     if (key.rfind("--", 0) == 0) key = key.substr(2);
     if (key == "gemm" || key == "NOVA_GEMM") {
-      if (value != "clblast" && value != "kernels")
-        throw bad("GEMM provider '" + value + "' is not one of clblast, kernels");
+      if (value != "tuned" && value != "clblast" && value != "kernels")
+        throw bad("GEMM provider '" + value + "' is not one of tuned, clblast, kernels");
       s.gemm = value;
       continue;
     }
@@ -99,7 +100,7 @@ inline void check_unique_names(const std::vector<Setting>& settings) {
 }
 
 // The axes around the quick preset; the first one is the baseline. Settings whose
-// configuration equals an earlier one's (quick already has 32 samples, width 64, CLBlast and,
+// configuration equals an earlier one's (quick already has 32 samples, width 64, tuned GEMMs and,
 // once `occupancy` exists, skipping on) are trained once and reported under both names.
 inline std::vector<Setting> default_settings() {
   return parse_settings_text(
@@ -110,6 +111,7 @@ inline std::vector<Setting> default_settings() {
       "width-64:    width=64\n"
       "width-128:   width=128\n"
       "width-256:   width=256\n"
+      "gemm-tuned:  gemm=tuned\n"
       "gemm-clblast: gemm=clblast\n"
       "gemm-kernels: gemm=kernels\n"
       "skip-on:     occupancy=true\n"

@@ -65,6 +65,7 @@ BOOST_AUTO_TEST_CASE(settings_parse) {
   BOOST_TEST(s.gemm == "kernels");
   BOOST_TEST(parse_setting("quick").overrides.empty());
   BOOST_TEST(parse_setting("k:NOVA_GEMM=clblast").gemm == "clblast");
+  BOOST_TEST(parse_setting("k:gemm=tuned").gemm == "tuned");
   BOOST_TEST(parse_setting("d:--samples=16").overrides[0].first == "samples");  // a flag's spelling
 
   const auto settings = parse_settings_text("# comment\n\nbase\n  fast: samples=16  # fewer\n", "s.txt");
@@ -77,7 +78,7 @@ BOOST_AUTO_TEST_CASE(settings_parse) {
   BOOST_TEST(d.front().name == "quick");
   BOOST_TEST(d.front().overrides.empty());
   for (const char* n : {"samples-32", "samples-64", "samples-128", "width-64", "width-128", "width-256",
-                        "gemm-clblast", "gemm-kernels", "skip-on", "skip-off"}) {
+                        "gemm-tuned", "gemm-clblast", "gemm-kernels", "skip-on", "skip-off"}) {
     bool found = false;
     for (const Setting& x : d) found = found || x.name == n;
     BOOST_TEST(found, n);
