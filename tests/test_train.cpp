@@ -118,6 +118,11 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
     c.steps = 11;
     c.rays = 64;
     c.samples = 8;
+    // Occupancy updates on both sides of the split (phase steps 3, 5, 7, ...): the grids are
+    // part of the state a resume restores.
+    c.occupancy_res = 16;
+    c.occupancy_warmup = 3;
+    c.occupancy_every = 2;
     const long n = 8, total = pretrain + c.steps;
     Trainer straight(runtime(), scene, c, (dir / "a").string());
     straight.run({}, total);
@@ -139,6 +144,49 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
       BOOST_TEST(same_bits(a.arrays[i].values, b.arrays[i].values), "array " << a.arrays[i].name << ", pretrain " << pretrain);
     }
   }
+}
+
+// Empty-space skipping changes what a trained model renders by little: the same checkpoint
+// rendered with its occupancy grids and with every sample. A skipped sample lies in a cell
+// whose probed density stayed under the threshold (here alpha 0.1 over one cell, so that the
+// short run skips two thirds of its samples), and dropping it also drops its blend share,
+// which shifts colour between NeRFs where an occupied one shares the sample. Measured: 33% of
+// the samples kept, worst camera-0 view 34.8 dB between the two renders; the floor is 30 dB
+// (3% RMS), below which skipping would visibly change the picture.
+BOOST_AUTO_TEST_CASE(skipping_empty_space_keeps_the_render) {
+  const Scene scene = tiny_scene();
+  TempDir dir("skip");
+  TrainConfig c = tiny_config(Encoding::HashGrid);
+  c.pretrain_steps = 100;
+  c.steps = 150;
+  c.occupancy_res = 32;
+  c.occupancy_warmup = 50;
+  c.occupancy_every = 16;
+  c.occupancy_alpha = 0.1f;
+  Trainer t(runtime(), scene, c, (dir / "run").string());
+  double kept = 1;
+  t.run([&](const TrainProgress& p) { kept = p.kept; });
+  BOOST_TEST_MESSAGE("samples kept in the last logged step: " << kept);
+  BOOST_TEST(kept < 0.9);  // the grids must skip something for this test to mean anything
+  const Checkpoint ck = t.checkpoint();
+  ViewRenderer r(runtime(), c, ray_geometry(scene), ck);
+  BOOST_REQUIRE(r.skips_empty_space());
+  double worst = 1e9;
+  for (const GroundTruthView& v : scene.gt_views) {
+    if (v.kind != "cam0") continue;
+    ViewRequest req;
+    req.camera = v.camera;
+    req.instances = scene_instances(scene.num_objects, v.time);
+    r.set_skip_empty_space(true);
+    const ViewImage skipped = r.render(req);
+    r.set_skip_empty_space(false);
+    const ViewImage full = r.render(req);
+    const double p = psnr(float_rgb_to_image(skipped.rgb, skipped.width, skipped.height),
+                          float_rgb_to_image(full.rgb, full.width, full.height));
+    worst = std::min(worst, p);
+  }
+  BOOST_TEST_MESSAGE("skipped against full render: worst PSNR " << worst << " dB");
+  BOOST_TEST(worst > 30.0);
 }
 
 BOOST_AUTO_TEST_CASE(mismatched_checkpoints_are_refused) {

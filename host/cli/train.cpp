@@ -31,7 +31,9 @@ void print_progress(const TrainProgress& p) {
   std::snprintf(line, sizeof line, "step %7ld/%ld  %-8s loss %.5f  psnr %5.2f dB  lr %.2e  %6.0f rays/s  %s  eta %s",
                 p.step, p.total, p.phase.c_str(), p.loss, p.psnr, p.lr, p.rays_per_s,
                 clock_text(p.seconds).c_str(), clock_text(p.eta_seconds).c_str());
-  std::cerr << line << "\n";
+  std::cerr << line;
+  if (p.kept >= 0) std::fprintf(stderr, "  mlp on %.0f%% of samples", 100.0 * p.kept);
+  std::cerr << "\n";
 }
 
 }  // namespace

@@ -29,10 +29,39 @@ cl_mem ExecContext::grad_in(size_t i) const {
 }
 bool ExecContext::accumulate_in(size_t i) const { return ex_.accumulate_.at(node_).at(i); }
 
+namespace {
+size_t live_rows(const TensorInfo& t, const std::vector<size_t>& extents, const Graph& g, size_t rows) {
+  if (t.extent < 0) return rows;
+  return rows / g.extent_capacity(t.extent) * extents.at(t.extent);
+}
+}  // namespace
+
+size_t ExecContext::in_rows(size_t i, size_t rows) const {
+  return live_rows(ex_.graph_.tensor(op_.inputs().at(i)), ex_.extents_, ex_.graph_, rows);
+}
+size_t ExecContext::out_rows(size_t i, size_t rows) const {
+  return live_rows(ex_.graph_.tensor(op_.outputs().at(i)), ex_.extents_, ex_.graph_, rows);
+}
+void ExecContext::set_extent(int e, size_t rows) {
+  if (rows > ex_.graph_.extent_capacity(e))
+    throw Error("extent '" + ex_.graph_.extent_name(e) + "': " + std::to_string(rows) +
+                    " rows exceed its capacity " + std::to_string(ex_.graph_.extent_capacity(e)),
+                kExitInternal);
+  ex_.extents_.at(e) = rows;
+}
+
+size_t Executor::live_numel(TensorId t) const {
+  const TensorInfo& info = graph_.tensor(t);
+  if (info.extent < 0) return info.shape.numel();
+  const size_t d = info.shape.dims[info.shape.row_dim()];
+  return info.shape.numel() / d * extents_.at(info.extent);
+}
+
 // ---- schedule and memory ---------------------------------------------------------------------
 
 Executor::Executor(Runtime& rt, Graph& graph, ExecutorOptions options)
     : rt_(rt), graph_(graph), options_(options) {
+  for (size_t e = 0; e < graph_.extent_count(); ++e) extents_.push_back(graph_.extent_capacity(static_cast<int>(e)));
   build_schedule();
   allocate();
   init_parameters(options.seed);
@@ -274,7 +303,8 @@ void Executor::backward() {
 void Executor::check_finite(int n, Pass pass) {
   const Op& op = graph_.node(n);
   const auto check = [&](TensorId t, cl_mem m, const char* what) {
-    const size_t count = graph_.tensor(t).shape.numel();
+    const size_t count = live_numel(t);
+    if (count == 0) return;
     const auto v = rt_.download_floats(m, count);
     for (size_t i = 0; i < count; ++i)
       if (!std::isfinite(v[i])) {
@@ -313,7 +343,9 @@ std::vector<float> Executor::get(Tensor t) {
   const TensorInfo& info = graph_.tensor(t.id);
   if (info.role == TensorRole::Activation && !info.keep)
     throw Error("tensor '" + info.name + "' is not kept after a run (Graph::keep)", kExitInternal);
-  return rt_.download_floats(values_[t.id].get(), info.shape.numel());
+  // A packed tensor: its live rows (the rest of its capacity holds nothing of this run).
+  const size_t n = live_numel(t.id);
+  return n ? rt_.download_floats(values_[t.id].get(), n) : std::vector<float>{};
 }
 
 std::vector<float> Executor::get_grad(Tensor t) {

@@ -87,8 +87,33 @@ void Graph::add(std::unique_ptr<Op> op, const std::vector<Tensor>& inputs,
     info.producer = index;
     info.requires_grad = any_grad;
     op->outputs_.push_back(t.id);
+    if (!op->propagates_extent() || info.extent >= 0) continue;
+    for (const Tensor& in : inputs) {
+      const TensorInfo& src = tensors_[in.id];
+      if (src.extent < 0 || src.shape.rank() != info.shape.rank()) continue;
+      const size_t d = src.shape.row_dim();
+      if (info.shape.dims[d] != src.shape.dims[d]) continue;
+      info.extent = src.extent;
+      break;
+    }
   }
   nodes_.push_back(std::move(op));
+}
+
+int Graph::add_extent(const std::string& name, size_t capacity) {
+  if (capacity == 0) throw Error("extent '" + name + "' has no capacity", kExitInternal);
+  extent_capacity_.push_back(capacity);
+  extent_name_.push_back(name);
+  return static_cast<int>(extent_capacity_.size() - 1);
+}
+
+void Graph::bind_extent(Tensor t, int extent) {
+  TensorInfo& info = tensors_.at(t.id);
+  if (extent < 0 || static_cast<size_t>(extent) >= extent_capacity_.size() ||
+      info.shape.dims[info.shape.row_dim()] != extent_capacity_[extent])
+    throw Error("tensor '" + info.name + "' " + info.shape.str() + " cannot bind extent " +
+                    std::to_string(extent), kExitInternal);
+  info.extent = extent;
 }
 
 void Graph::set_loss(Tensor loss) {

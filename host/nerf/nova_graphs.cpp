@@ -22,6 +22,34 @@ SampleOptions sample_options(int samples, const RayGeometry& g, std::vector<int>
   return s;
 }
 
+// The static field on the samples its pack keeps (all of them without one).
+Tensor static_raw(Tensor positions, Tensor viewdirs, const FieldConfig& f, std::shared_ptr<PackSelect> pack) {
+  if (!pack) return build_static_field(positions, viewdirs, f);
+  Packed p = pack_occupied(positions, pack);
+  Tensor raw = build_static_field(gather_rows(positions, p), gather_rows(viewdirs, p), f);
+  return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
+}
+
+Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, std::shared_ptr<PackSelect> pack) {
+  if (!pack) return build_object_fields(positions, times, f);
+  Packed p = pack_occupied(positions, pack);
+  Tensor raw = build_object_fields(gather_rows(positions, p), gather_rows(times, p), f);
+  return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
+}
+
+std::shared_ptr<PackSelect> new_select(bool on, std::vector<int> grid_of_batch) {
+  if (!on) return nullptr;
+  auto s = std::make_shared<PackSelect>();
+  s->grid_of_batch = std::move(grid_of_batch);
+  return s;
+}
+
+std::vector<int> object_grids(int objects) {
+  std::vector<int> v;
+  for (int k = 1; k <= objects; ++k) v.push_back(k);
+  return v;
+}
+
 }  // namespace
 
 RayGeometry ray_geometry(const Scene& scene) {
@@ -90,7 +118,8 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1}));
-  Tensor raw = build_static_field(smp.positions[0], smp.viewdirs[0], scene_field(c.field, geo));
+  s->pack_static = new_select(c.occupancy, {0});
+  Tensor raw = static_raw(smp.positions[0], smp.viewdirs[0], scene_field(c.field, geo), s->pack_static);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
   Tensor rgb_loss = pretrain_rgb_loss(out.rgb, s->target_rgb);
   s->psnr_mse = rgb_loss;
@@ -119,8 +148,10 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1, K}));
   const FieldConfig field = scene_field(c.field, geo);
-  Tensor raw_static = build_static_field(smp.positions[0], smp.viewdirs[0], field);
-  Tensor raw_objects = build_object_fields(smp.positions[1], s->times, field);
+  s->pack_static = new_select(c.occupancy, {0});
+  s->pack_objects = new_select(c.occupancy, object_grids(K));
+  Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
+  Tensor raw_objects = object_raw(smp.positions[1], s->times, field, s->pack_objects);
   Tensor raw = stack({raw_static, raw_objects});
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
   NovelViewLoss l = novel_view_loss(out, raw, smp.delta, s->noise,
@@ -141,7 +172,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
 
 std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int samples,
                                             const RayGeometry& geo, int rays, bool background,
-                                            int instances, bool hard_blend) {
+                                            int instances, bool hard_blend, bool occupancy) {
   const FieldConfig f = scene_field(field, geo);
   if (!background && instances < 1)
     throw Error("a view needs the background or at least one object instance");
@@ -160,7 +191,10 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
   Samples smp = stratified_samples(r, Tensor{}, sample_options(samples, geo, N == 1 ? std::vector<int>{1}
                                                                                   : std::vector<int>{1, N - 1}));
   std::vector<Tensor> parts;
-  if (background) parts.push_back(build_static_field(smp.positions[0], smp.viewdirs[0], f));
+  if (background) {
+    v->pack_static = new_select(occupancy, {0});
+    parts.push_back(static_raw(smp.positions[0], smp.viewdirs[0], f, v->pack_static));
+  }
   if (instances > 0) {
     const size_t B = static_cast<size_t>(instances);
     v->transforms = g.input("transforms", Shape{B, 12});
@@ -170,7 +204,8 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
     io.ax = geo.ax;
     io.ay = geo.ay;
     Tensor pos = instance_points(smp.positions[0], v->transforms, io);
-    parts.push_back(build_object_fields(pos, v->times, f));
+    v->pack_objects = new_select(occupancy, std::vector<int>(B, 1));
+    parts.push_back(object_raw(pos, v->times, f, v->pack_objects));
   }
   Tensor raw = parts.size() == 1 ? parts[0] : stack(parts);
   RenderOptions ro;
@@ -178,6 +213,26 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
   v->out = render_composite(raw, smp.delta, smp.z, Tensor{}, ro);
   for (Tensor t : {v->out.rgb, v->out.mask, v->out.depth, v->out.acc}) g.keep(t);
   return v;
+}
+
+std::unique_ptr<DensityGraph> build_density_graph(const FieldConfig& field, const RayGeometry& geo, int objects,
+                                                  int points) {
+  const FieldConfig f = scene_field(field, geo);
+  auto d = std::make_unique<DensityGraph>();
+  Graph& g = d->graph;
+  const size_t P = static_cast<size_t>(points);
+  d->static_positions = g.input("positions", Shape{P, 3});
+  d->static_viewdirs = g.input("viewdirs", Shape{P, 3});
+  d->static_raw = build_static_field(d->static_positions, d->static_viewdirs, f);
+  g.keep(d->static_raw);
+  if (objects > 0) {
+    const size_t K = static_cast<size_t>(objects);
+    d->object_positions = g.input("object_positions", per_group(K, P, 3));
+    d->object_times = g.input("object_times", per_group(K, P, 1));
+    d->object_raw = build_object_fields(d->object_positions, d->object_times, f);
+    g.keep(d->object_raw);
+  }
+  return d;
 }
 
 }  // namespace nova

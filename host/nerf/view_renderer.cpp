@@ -71,18 +71,42 @@ ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeom
                 std::to_string(geometry.num_objects));
   for (const auto& a : checkpoint.arrays)
     if (a.name.rfind(kObjectPrefix, 0) == 0) has_objects_ = true;
+  if (config.occupancy) {
+    auto grids = std::make_shared<std::vector<OccupancyGrid>>();
+    for (int k = 0; k <= geometry.num_objects; ++k) {
+      const std::string name = occupancy_array_name(k);
+      const auto it = std::find_if(checkpoint.arrays.begin(), checkpoint.arrays.end(),
+                                   [&](const CheckpointArray& a) { return a.name == name; });
+      if (it == checkpoint.arrays.end()) break;
+      if (it->shape.size() != 3 || it->shape[0] != it->shape[1] || it->shape[1] != it->shape[2])
+        throw Error("checkpoint array '" + name + "' is not a cubic occupancy grid");
+      const float bound = scene_field(config.field, geometry).hash.bound;
+      OccupancyGrid g(static_cast<int>(it->shape[0]), bound > 0 ? bound : geometry.extent, config.occupancy_alpha);
+      g.density = it->values;
+      g.refresh();
+      grids->push_back(std::move(g));
+    }
+    // A pretraining checkpoint has the static grid alone: objects then keep every sample.
+    if (!grids->empty()) {
+      while (static_cast<int>(grids->size()) <= geometry.num_objects)
+        grids->emplace_back(1, (*grids)[0].bound, config.occupancy_alpha);
+      grids_ = saved_grids_ = grids;
+    }
+  }
   const long rows = std::max<long>(config.samples, (1L << 24) / std::max(64, config.field.width));
   chunk_rays_ = chunk_rays > 0 ? chunk_rays : static_cast<int>(std::max<long>(1, rows / config.samples));
 }
 
 ViewRenderer::~ViewRenderer() = default;
 
+void ViewRenderer::set_skip_empty_space(bool on) { grids_ = on ? saved_grids_ : nullptr; }
+
 ViewRenderer::Cached& ViewRenderer::graph_for(bool background, int instances, int rays, bool hard_blend) {
   auto& slot = graphs_[{background, instances, rays, hard_blend}];
   if (!slot) {
     slot = std::make_unique<Cached>();
     slot->graph = build_view_graph(config_.field, config_.samples, geometry_, rays, background,
-                                   instances, hard_blend);
+                                   instances, hard_blend, saved_grids_ != nullptr);
     slot->exec = std::make_unique<Executor>(rt_, slot->graph->graph);
     slot->loaded_objects.assign(static_cast<size_t>(instances), 0);
     for (Tensor p : slot->graph->graph.parameters())
@@ -126,6 +150,12 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
     }
     c.loaded_objects = wanted;
   }
+  for (auto& pack : {vg.pack_static, vg.pack_objects})
+    if (pack) {
+      pack->grids = grids_;
+      pack->enabled = grids_ != nullptr;
+    }
+  if (vg.pack_objects) vg.pack_objects->grid_of_batch = wanted;
   const size_t R = static_cast<size_t>(vg.rays), S = static_cast<size_t>(config_.samples);
   const int N = (req.background ? 1 : 0) + B;
   c.exec->set(vg.cameras, camera_rows(std::vector<Camera>(static_cast<size_t>(N), req.camera)));

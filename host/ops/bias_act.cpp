@@ -15,19 +15,23 @@ class BiasActOp final : public Op {
   size_t parts() const { return std::min<size_t>(64, std::max<size_t>(1, s_.rows / 64)); }
 
   void forward(ExecContext& ctx) override {
-    const size_t n = s_.batch * s_.rows * s_.cols;
+    const size_t rows = ctx.in_rows(0, s_.rows);
+    const size_t n = s_.batch * rows * s_.cols;
+    if (n == 0) return;
     ctx.launch("activation", "bias_act_forward", options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.out(0))
         .arg(detail::u32(n, "bias_act size")).arg(detail::u32(s_.cols, "cols"))
-        .arg(detail::u32(s_.rows * s_.cols, "per batch"))
+        .arg(detail::u32(rows * s_.cols, "per batch"))
         .run(n);
   }
 
   void backward(ExecContext& ctx) override {
     cl_mem dy = ctx.grad_out(0);
     if (!dy) return;
-    const size_t n = s_.batch * s_.rows * s_.cols;
-    if (cl_mem dh = ctx.grad_in(0))
+    const size_t rows = ctx.in_rows(0, s_.rows);
+    const size_t n = s_.batch * rows * s_.cols;
+    if (n > 0)
+      if (cl_mem dh = ctx.grad_in(0))
       ctx.launch("activation", "bias_act_backward", options())
           .arg(ctx.out(0)).arg(dy).arg(dh).arg(detail::u32(n, "bias_act size"))
           .arg(static_cast<int>(ctx.accumulate_in(0)))
@@ -37,7 +41,7 @@ class BiasActOp final : public Op {
     const size_t bc = s_.batch * s_.cols;
     const unsigned parts = detail::u32(this->parts(), "parts");
     ctx.launch("activation", "bias_grad_partial", options())
-        .arg(ctx.out(0)).arg(dy).arg(ctx.workspace()).arg(detail::u32(s_.rows, "rows"))
+        .arg(ctx.out(0)).arg(dy).arg(ctx.workspace()).arg(detail::u32(rows, "rows"))
         .arg(detail::u32(s_.cols, "cols")).arg(detail::u32(bc, "batch cols")).arg(parts)
         .run2(bc, parts);
     ctx.launch("reduce", "colsum_finish")

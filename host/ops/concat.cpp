@@ -17,27 +17,30 @@ class ConcatOp final : public Op {
   std::string type() const override { return type_; }
 
   void forward(ExecContext& ctx) override {
+    const size_t rows = ctx.out_rows(0, rows_);
+    if (rows == 0) return;
     size_t offset = 0;
     for (size_t i = 0; i < widths_.size(); ++i) {
       ctx.launch("tensor", "copy_cols")
-          .arg(ctx.in(i)).arg(ctx.out(0)).arg(detail::u32(rows_, "rows"))
+          .arg(ctx.in(i)).arg(ctx.out(0)).arg(detail::u32(rows, "rows"))
           .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
           .arg(detail::u32(offset, "offset"))
-          .run(rows_ * widths_[i]);
+          .run(rows * widths_[i]);
       offset += widths_[i];
     }
   }
 
   void backward(ExecContext& ctx) override {
     cl_mem dy = ctx.grad_out(0);
+    const size_t rows = ctx.out_rows(0, rows_);
     size_t offset = 0;
     for (size_t i = 0; i < widths_.size(); ++i) {
-      if (cl_mem dx = ctx.grad_in(i); dx && dy)
+      if (cl_mem dx = ctx.grad_in(i); dx && dy && rows > 0)
         ctx.launch("tensor", "copy_cols_back")
-            .arg(dy).arg(dx).arg(detail::u32(rows_, "rows"))
+            .arg(dy).arg(dx).arg(detail::u32(rows, "rows"))
             .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
             .arg(detail::u32(offset, "offset")).arg(static_cast<int>(ctx.accumulate_in(i)))
-            .run(rows_ * widths_[i]);
+            .run(rows * widths_[i]);
       offset += widths_[i];
     }
   }

@@ -19,12 +19,14 @@ class HashEncodingOp final : public Op {
   std::string type() const override { return "hash_encoding"; }
 
   void forward(ExecContext& ctx) override {
+    const size_t rows = ctx.in_rows(0, rows_);
+    if (rows == 0) return;
     upload_resolutions(ctx.rt);
     ctx.launch("hashgrid", "hashgrid_forward", build_options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(res_buffer_).arg(ctx.out(0))
-        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows_, "rows"))
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound)
-        .run(nets_ * rows_ * c_.levels);
+        .run(nets_ * rows * c_.levels);
   }
 
   void backward(ExecContext& ctx) override {
@@ -38,7 +40,7 @@ class HashEncodingOp final : public Op {
     upload_resolutions(ctx.rt);
     ctx.launch("hashgrid", "hashgrid_backward", build_options())
         .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(dtable)
-        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows_, "rows"))
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(ctx.in_rows(0, rows_), "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound)
         .arg(static_cast<int>(ctx.accumulate_in(1)))
         .run(nets_ * c_.levels);

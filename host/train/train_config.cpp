@@ -161,6 +161,16 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.weights.sparsity; }));
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
+  o.push_back(bool_option("occupancy", "skip empty space: occupancy grids from the density, samples in empty cells never reach an MLP",
+                          [](TrainConfig& c) -> bool& { return c.occupancy; }));
+  o.push_back(int_option("occupancy-res", "occupancy grid cells per dimension", 1, 512,
+                         [](TrainConfig& c) -> int& { return c.occupancy_res; }));
+  o.push_back(int_option("occupancy-every", "steps between occupancy grid updates", 1, kBig,
+                         [](TrainConfig& c) -> int& { return c.occupancy_every; }));
+  o.push_back(int_option("occupancy-warmup", "steps of each phase before the first occupancy update (nothing skipped until then)", 0, kBig,
+                         [](TrainConfig& c) -> int& { return c.occupancy_warmup; }));
+  o.push_back(float_option("occupancy-alpha", "opacity over one grid cell above which the cell is occupied", 1e-6, 0.999,
+                           [](TrainConfig& c) -> float& { return c.occupancy_alpha; }));
   o.push_back(int_option("factor", "image downscale factor when loading the scene (0: the reader's default)", 0, 64,
                          [](TrainConfig& c) -> int& { return c.factor; }));
   o.push_back(int_option("holdout", "hold every n-th frame out of training for evaluation (0: none)", 0, 1000000,

@@ -61,6 +61,14 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   if (ec) throw Error("cannot create run folder '" + run_dir_ + "': " + ec.message());
   regions_.reserve(scene.frames.size());
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
+  if (config_.occupancy) {
+    const float bound = scene_field(config_.field, geometry_).hash.bound;
+    grids_ = std::make_shared<std::vector<OccupancyGrid>>(make_occupancy_grids(
+        geometry_.num_objects, config_.occupancy_res, bound > 0 ? bound : geometry_.extent, config_.occupancy_alpha));
+    std::vector<double> times;
+    for (const Frame& f : scene.frames) times.push_back(f.time);
+    occupancy_ = std::make_unique<OccupancyUpdater>(rt_, config_.field, geometry_, times);
+  }
   write_text_atomic(run_dir_ + "/" + kConfigFile,
                     format_config(config_, {"# the scene this run trained on", "scene = " + scene.source}));
 }
@@ -100,6 +108,8 @@ void Trainer::ensure_phase() {
   exec_.reset();
   graph_ = std::move(g);
   exec_ = std::move(e);
+  for (auto& pack : {graph_->pack_static, graph_->pack_objects})
+    if (pack) pack->grids = grids_;
   adam_ = std::make_unique<Adam>(rt_, exec_->parameter_floats());
   graph_joint_ = joint;
 }
@@ -186,6 +196,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   const float lr = c.lr * static_cast<float>(std::pow(c.lr_decay, static_cast<double>(phase_step) / c.lr_decay_steps));
   adam_->step(exec_->parameter_arena(), exec_->gradient_arena(), lr);
   ++step_;
+  maybe_update_occupancy(phase_step + 1);
 
   if (log) {
     p.phase = joint ? "joint" : "pretrain";
@@ -194,9 +205,33 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     p.augmented = augmented;
     p.terms.clear();
     for (auto& [name, t] : graph_->terms) p.terms.emplace_back(name, exec_->get(t).at(0));
+    if (grids_) {
+      size_t kept = 0, tested = 0;
+      for (auto& pack : {graph_->pack_static, graph_->pack_objects})
+        if (pack) {
+          kept += pack->kept;
+          tested += pack->tested;
+        }
+      p.kept = tested ? static_cast<double>(kept) / static_cast<double>(tested) : 1.0;
+      p.occupied.clear();
+      for (const OccupancyGrid& g : *grids_) p.occupied.push_back(g.occupied_fraction());
+    }
     const double m = exec_->get(graph_->psnr_mse).at(0);
     p.psnr = m > 0 ? -10.0 * std::log10(m) : 99.0;
   }
+}
+
+// nerfacc's schedule: nothing is skipped during a phase's warm-up, then every cell is probed
+// once and a random 1/16 of them every occupancy_every steps. Pretraining keeps only the
+// static grid current (the object NeRFs are untrained); the joint phase all of them.
+void Trainer::maybe_update_occupancy(long phase_step) {
+  const TrainConfig& c = config_;
+  if (!occupancy_ || phase_step < c.occupancy_warmup) return;
+  const long since = phase_step - c.occupancy_warmup;
+  if (since % c.occupancy_every != 0) return;
+  // Its own generator, seeded by the step: resume restores the grids, not another stream.
+  std::mt19937 rng(c.seed * 2654435761u + static_cast<unsigned>(step_));
+  occupancy_->update(*exec_, graph_->graph, *grids_, graph_joint_, since == 0, rng);
 }
 
 void Trainer::run(const std::function<void(const TrainProgress&)>& progress, long until_step) {
@@ -232,7 +267,13 @@ void Trainer::run(const std::function<void(const TrainProgress&)>& progress, lon
       for (auto& [name, v] : p.terms) metrics << ",\"" << name << "\":" << json_number(v);
       metrics << ",\"psnr\":" << json_number(p.psnr) << ",\"lr\":" << json_number(p.lr)
               << ",\"augmented\":" << (p.augmented ? "true" : "false")
-              << ",\"rays_per_s\":" << json_number(p.rays_per_s) << ",\"seconds\":" << json_number(p.seconds)
+              << ",\"rays_per_s\":" << json_number(p.rays_per_s);
+      if (p.kept >= 0) {
+        metrics << ",\"samples_kept\":" << json_number(p.kept) << ",\"occupied\":[";
+        for (size_t k = 0; k < p.occupied.size(); ++k) metrics << (k ? "," : "") << json_number(p.occupied[k]);
+        metrics << "]";
+      }
+      metrics << ",\"seconds\":" << json_number(p.seconds)
               << "}\n";
       metrics.flush();
       if (!std::isfinite(p.loss))
@@ -263,6 +304,12 @@ Checkpoint Trainer::checkpoint() {
   const size_t n = adam_->count();
   ck.arrays.push_back({"adam.m", {n}, rt_.download_floats(adam_->first_moment(), n)});
   ck.arrays.push_back({"adam.v", {n}, rt_.download_floats(adam_->second_moment(), n)});
+  if (grids_)
+    for (size_t k = 0; k < grids_->size(); ++k) {
+      const OccupancyGrid& g = (*grids_)[k];
+      const size_t r = static_cast<size_t>(g.resolution);
+      ck.arrays.push_back({occupancy_array_name(static_cast<int>(k)), {r, r, r}, g.density});
+    }
   return ck;
 }
 
@@ -301,6 +348,16 @@ void Trainer::resume() {
   rt_.upload(adam_->second_moment(), v.values.data(), v.values.size() * sizeof(float));
   adam_->set_steps(std::stol(ck.get("adam_steps")));
   set_rng_state(rng_, ck.get("rng"));
+  if (grids_)
+    for (size_t k = 0; k < grids_->size(); ++k) {
+      OccupancyGrid& g = (*grids_)[k];
+      const CheckpointArray& a = ck.array(occupancy_array_name(static_cast<int>(k)));
+      if (a.values.size() != g.density.size())
+        throw mismatch("occupancy grid " + std::to_string(k) + " has " + std::to_string(a.values.size()) +
+                       " cells, configured " + std::to_string(g.density.size()));
+      g.density = a.values;
+      g.refresh();
+    }
   truncate_metrics(run_dir_ + "/" + kMetricsFile, step_);
 }
 

@@ -38,6 +38,15 @@ class ExecContext {
   bool accumulate_in(size_t i) const;
   cl_mem workspace() const { return workspace_; }
 
+  // Rows in use of a tensor whose static row count (at capacity) is `rows`: `rows` scaled by
+  // live / capacity of its extent, so that it works for flattened [B * M] counts as well as
+  // per-batch M. Static tensors give `rows` back.
+  size_t in_rows(size_t i, size_t rows) const;
+  size_t out_rows(size_t i, size_t rows) const;
+  // Sets the live row count of extent `e` (the producer of its packed tensors does this in
+  // its forward); later ops of the pass, and the backward, see it.
+  void set_extent(int e, size_t rows);
+
   Launch launch(const std::string& family, const std::string& name,
                 const std::string& options = "") {
     return rt.launch(family, name, options);
@@ -78,6 +87,10 @@ class Executor {
   cl_mem buffer(Tensor t) const;
   cl_mem grad_buffer(Tensor t) const;  // nullptr if it has none
   float loss();
+  // Live rows of extent e after the last forward (its capacity before any).
+  size_t extent(int e) const { return extents_.at(e); }
+  // Elements in use of a tensor: its numel, scaled down for a dynamic extent.
+  size_t live_numel(TensorId t) const;
 
   // All parameters live in one arena and their gradients in a second one with the same
   // layout, so an optimiser updates everything with one kernel.
@@ -121,6 +134,7 @@ class Executor {
   bool forward_done_ = false;
 
   std::map<std::string, OpTiming> timings_;
+  std::vector<size_t> extents_;  // live rows per graph extent
 };
 
 }  // namespace nova

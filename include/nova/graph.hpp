@@ -32,6 +32,8 @@ struct Shape {
   size_t numel() const;
   size_t cols() const { return dims.empty() ? 1 : dims.back(); }  // last dimension
   size_t rows() const { return cols() ? numel() / cols() : 0; }   // all the others
+  // The row dimension a dynamic extent binds: dims[rank - 2], or dims[0] for rank 1.
+  size_t row_dim() const { return rank() >= 2 ? rank() - 2 : 0; }
   bool operator==(const Shape& o) const { return dims == o.dims; }
   std::string str() const;  // "[65536, 256]"
 };
@@ -54,6 +56,10 @@ struct TensorInfo {
   Init init;
   int producer = -1;           // node index; -1 for inputs and parameters
   std::vector<int> consumers;  // node indices, in graph order
+  // Dynamic extent (Graph::add_extent) bound to the row dimension, dims[rank - 2] (dims[0]
+  // for rank 1): the tensor is allocated for the capacity, and a run uses only the leading
+  // `extent value` rows of each batch, laid out densely ([B, live, C]). -1: static.
+  int extent = -1;
 };
 
 class Graph;
@@ -77,6 +83,10 @@ class Op {
   virtual std::string type() const = 0;
   virtual void forward(ExecContext& ctx) = 0;
   virtual void backward(ExecContext& ctx) = 0;
+  // Whether outputs whose row dimension matches a dynamic input's inherit its extent
+  // (Graph::add). Ops whose output rows are not the input rows (a scatter back to a dense
+  // layout) return false.
+  virtual bool propagates_extent() const { return true; }
   // Tensors (inputs or outputs of this op) its backward reads; the memory plan keeps them
   // alive until then. Default: every input and output.
   virtual std::vector<TensorId> saved_for_backward() const;
@@ -109,6 +119,15 @@ class Graph {
   void add(std::unique_ptr<Op> op, const std::vector<Tensor>& inputs,
            const std::vector<Tensor>& outputs);
 
+  // A dynamic row count (packed samples): tensors bound to it are allocated for `capacity`
+  // rows and the op that produces them sets the live count while the graph runs
+  // (ExecContext::set_extent). Row-wise ops downstream inherit the binding.
+  int add_extent(const std::string& name, size_t capacity);
+  void bind_extent(Tensor t, int extent);
+  size_t extent_count() const { return extent_capacity_.size(); }
+  size_t extent_capacity(int e) const { return extent_capacity_.at(e); }
+  const std::string& extent_name(int e) const { return extent_name_.at(e); }
+
   // The scalar whose gradient backward() computes. Without one the graph is inference-only.
   void set_loss(Tensor loss);
   Tensor loss() const { return loss_ >= 0 ? Tensor{loss_, const_cast<Graph*>(this)} : Tensor{}; }
@@ -131,6 +150,8 @@ class Graph {
   std::vector<TensorInfo> tensors_;
   std::vector<std::unique_ptr<Op>> nodes_;
   TensorId loss_ = -1;
+  std::vector<size_t> extent_capacity_;
+  std::vector<std::string> extent_name_;
 };
 
 }  // namespace nova

@@ -9,6 +9,7 @@
 
 #include "nova/graph.hpp"
 #include "nova/losses.hpp"
+#include "nova/occupancy.hpp"
 #include "nova/render.hpp"
 #include "nova/scene.hpp"
 #include "nova/train_config.hpp"
@@ -42,6 +43,9 @@ struct StepGraph {
   Tensor loss;
   std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
   Tensor psnr_mse;  // the composite-colour mse the progress PSNR is computed from
+  // With TrainConfig::occupancy: what the static and the object samples are packed against
+  // (null: no packing). Their grids are unset, so nothing is skipped until the owner sets them.
+  std::shared_ptr<PackSelect> pack_static, pack_objects;
 };
 
 // Whether the graphs get the depth loss: a weight, disparity maps, and NDC rays (where the
@@ -59,11 +63,25 @@ struct ViewGraph {
   bool background = true;
   Tensor pixels, cameras, transforms, times;  // cameras: [N, 16], the view's camera N times
   RenderOutputs out;
+  // With `occupancy`: the packing of the static samples and of the instances' samples (set
+  // grid_of_batch to each instance's object grid).
+  std::shared_ptr<PackSelect> pack_static, pack_objects;
 };
 // Inference: `rays` rays of one camera, the static NeRF when `background`, and `instances`
 // object-NeRF copies each placed by a world-to-object transform at its own time.
 std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& f, int samples, const RayGeometry& g,
                                             int rays, bool background, int instances,
-                                            bool hard_blend);
+                                            bool hard_blend, bool occupancy = false);
+
+// Density probes for the occupancy grids: the static field at `points` positions and, with
+// objects > 0, every object field at `points` positions and times; the same parameter names
+// as the training graphs, so their weights copy over by name.
+struct DensityGraph {
+  Graph graph;
+  Tensor static_positions, static_viewdirs, static_raw;      // [P, 3], [P, 3], [P, 5]
+  Tensor object_positions, object_times, object_raw;         // [K, P, 3], [K, P, 1], [K, P, 5]
+};
+std::unique_ptr<DensityGraph> build_density_graph(const FieldConfig& f, const RayGeometry& g, int objects,
+                                                  int points);
 
 }  // namespace nova

@@ -35,6 +35,14 @@ struct TrainConfig {
   // Depth up to scale and shift against the scene's disparity maps (disp/), in both phases,
   // as DynamicNeRF (whose code NOVA builds on) does; off without disparity or with 0.
   float w_depth = 0.04f;
+  // Empty-space skipping (occupancy.hpp): one grid per NeRF, updated from the density every
+  // occupancy_every steps once occupancy_warmup steps of a phase have passed; samples in
+  // empty cells never reach an MLP.
+  bool occupancy = true;
+  int occupancy_res = 64;
+  int occupancy_every = 16;
+  int occupancy_warmup = 256;
+  float occupancy_alpha = 0.01f;
   // Scene loading.
   int factor = 0;   // image downscale (0: the reader's default)
   int holdout = 0;  // every n-th frame is held out for evaluation (0: none; LLFF uses 8)

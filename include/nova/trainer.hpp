@@ -13,6 +13,7 @@
 #include "nova/checkpoint.hpp"
 #include "nova/executor.hpp"
 #include "nova/nova_graphs.hpp"
+#include "nova/occupancy_updater.hpp"
 #include "nova/optim.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene.hpp"
@@ -27,6 +28,10 @@ struct TrainProgress {
   double rays_per_s = 0, seconds = 0, eta_seconds = 0;
   std::vector<std::pair<std::string, double>> terms;
   bool augmented = false;  // whether the logged step was an augmented one
+  // With occupancy grids: the fraction of samples the logged step ran an MLP on (static and
+  // object samples together), and each grid's occupied fraction; -1 / empty without.
+  double kept = -1;
+  std::vector<double> occupied;
 };
 
 inline const std::string kCheckpointFile = "checkpoint.bin";
@@ -62,6 +67,7 @@ class Trainer {
   void ensure_phase();
   void train_step(bool log, TrainProgress& p);
   void write_checkpoint_now();
+  void maybe_update_occupancy(long phase_step);
 
   Runtime& rt_;
   const Scene& scene_;
@@ -76,6 +82,9 @@ class Trainer {
   bool graph_joint_ = false;
   bool profile_ = false;
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
+  // Empty-space skipping (config_.occupancy): the grids of the static and object NeRFs.
+  std::shared_ptr<std::vector<OccupancyGrid>> grids_;
+  std::unique_ptr<OccupancyUpdater> occupancy_;
 };
 
 }  // namespace nova

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "nova/checkpoint.hpp"
+#include "nova/occupancy.hpp"
 #include "nova/compose_spec.hpp"
 #include "nova/executor.hpp"
 #include "nova/nova_graphs.hpp"
@@ -61,6 +62,10 @@ class ViewRenderer {
   int num_objects() const { return geometry_.num_objects; }
   bool has_objects() const { return has_objects_; }
   int chunk_rays() const { return chunk_rays_; }
+  // Whether renders skip empty space (the run trained with occupancy grids and saved them).
+  bool skips_empty_space() const { return grids_ != nullptr; }
+  // Renders every sample even when the run has occupancy grids (the reference for tests).
+  void set_skip_empty_space(bool on);
 
  private:
   struct Cached;
@@ -72,6 +77,7 @@ class ViewRenderer {
   const Checkpoint& checkpoint_;
   bool has_objects_ = false;
   int chunk_rays_ = 0;
+  std::shared_ptr<std::vector<OccupancyGrid>> grids_, saved_grids_;
   std::map<std::tuple<bool, int, int, bool>, std::unique_ptr<Cached>> graphs_;
 };
 

@@ -1,0 +1,231 @@
+// Empty-space skipping: the occupancy grid's geometry and update rule, and the packed-sample
+// ops (pack_occupied, gather_rows, scatter_rows) with the row-wise ops that run on the live
+// rows of a dynamic extent (positional_encoding, concat, linear, bias_act), against float64
+// host references and central finite differences.
+//
+// Sizes: M = 1009 samples (prime) per batch, so every launch is ragged; these ops are left
+// out of test_odd_sizes' sweep for that reason.
+// Tolerances: gather, fill and scatter move floats, so they must be exact. The MLP on packed
+// rows is a sum of K = 3 + 3 * 2 * 2 + 3 = 18 float32 products per output, each input within
+// 1 of 0 and weights within 1: rtol 1e-5 with atol 1e-5 covers float32 rounding (18 * 6e-8
+// relative, plus sin/cos within 4 ulp). Gradients: the harness default (2e-2 of the
+// gradient's scale) with pre-activations kept 0.05 away from the ReLU kink.
+#include <boost/test/unit_test.hpp>
+
+#include <cmath>
+#include <memory>
+
+#include "harness.hpp"
+#include "nova/executor.hpp"
+#include "nova/occupancy.hpp"
+#include "nova/ops.hpp"
+#include "nova/render.hpp"
+
+using namespace nova;
+using nova::test::random_floats;
+
+namespace {
+
+constexpr size_t B = 2, M = 1009, F = 2;  // batches, dense rows, posenc frequencies
+constexpr size_t D = 3, E = D * (1 + 2 * F) + D, H = 4;  // input, encoded + raw, hidden
+
+// A grid with a checkerboard of occupied cells (every cell evaluated).
+OccupancyGrid checker_grid(int res, int phase) {
+  OccupancyGrid g(res, 1.0f, 0.01f);
+  const size_t r = static_cast<size_t>(res);
+  for (size_t c = 0; c < g.cells(); ++c) {
+    const size_t x = c % r, y = (c / r) % r, z = c / (r * r);
+    g.density[c] = (x + y + z + static_cast<size_t>(phase)) % 2 ? 10.0f * g.threshold() : 0.0f;
+  }
+  g.refresh();
+  return g;
+}
+
+std::shared_ptr<PackSelect> two_grid_select() {
+  auto s = std::make_shared<PackSelect>();
+  s->grids = std::make_shared<std::vector<OccupancyGrid>>(
+      std::vector<OccupancyGrid>{checker_grid(4, 0), checker_grid(4, 1)});
+  s->grid_of_batch = {0, 1};
+  return s;
+}
+
+// The float64 picture of a packing: per batch, the kept dense rows in order.
+std::vector<std::vector<size_t>> reference_kept(const std::vector<float>& pos, const PackSelect& s) {
+  std::vector<std::vector<size_t>> kept(B);
+  for (size_t b = 0; b < B; ++b) {
+    const OccupancyGrid& g = (*s.grids)[static_cast<size_t>(s.grid_of_batch[b])];
+    for (size_t m = 0; m < M; ++m) {
+      // The cell by float64 arithmetic: floor((p + 1) / 2 * 4), clamped.
+      size_t c = 0;
+      for (int d = 2; d >= 0; --d) {
+        const double u = (double(pos[(b * M + m) * 3 + d]) + 1.0) / 2.0 * g.resolution;
+        const int i = std::clamp(static_cast<int>(std::floor(u)), 0, g.resolution - 1);
+        c = c * static_cast<size_t>(g.resolution) + static_cast<size_t>(i);
+      }
+      if (g.occupied[c]) kept[b].push_back(m);
+    }
+  }
+  return kept;
+}
+
+struct PackedMlp {
+  Tensor positions, w, bias, out;
+};
+
+// positions [B, M, 3] -> pack -> [posenc(p), p] -> p' w + b -> ReLU -> scatter (fill -7).
+PackedMlp packed_mlp(Graph& g, std::shared_ptr<PackSelect> s, bool grad) {
+  PackedMlp n;
+  n.positions = g.input("positions", Shape{B, M, D});
+  n.w = g.input("w", Shape{B, E, H}, grad);
+  n.bias = g.input("b", Shape{B, H}, grad);
+  Packed p = pack_occupied(n.positions, std::move(s));
+  Tensor x = gather_rows(n.positions, p);
+  Tensor h = dense(concat({positional_encoding(x, F), x}), n.w, n.bias, Activation::ReLU);
+  n.out = scatter_rows(h, p, std::vector<float>(H, -7.0f));
+  return n;
+}
+
+double encoded(const std::vector<float>& pos, size_t row, size_t j) {
+  // [p, sin(2^0 p), cos(2^0 p), sin(2^1 p), cos(2^1 p)] then p again.
+  if (j >= D * (1 + 2 * F)) return pos[row * 3 + (j - D * (1 + 2 * F))];
+  const size_t block = j / D, d = j % D;
+  const double p = pos[row * 3 + d];
+  if (block == 0) return p;
+  const double f = std::ldexp(1.0, static_cast<int>((block - 1) / 2));
+  return (block - 1) % 2 == 0 ? std::sin(f * p) : std::cos(f * p);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(packing)
+
+BOOST_AUTO_TEST_CASE(grid_geometry_and_update) {
+  OccupancyGrid g(8, 2.0f, 0.05f);
+  BOOST_TEST(g.occupied_fraction() == 1.0);  // never evaluated: nothing may be skipped
+  BOOST_TEST(g.threshold() == -std::log(0.95) / 0.5, boost::test_tools::tolerance(1e-6));
+  for (size_t c : {size_t{0}, size_t{9}, size_t{300}, g.cells() - 1}) {
+    const float u[3] = {0.5f, 0.25f, 0.75f};
+    float p[3];
+    g.point_in(c, u, p);
+    BOOST_TEST(g.cell_of(p) == c);
+  }
+  const float outside[3] = {-5.0f, 0.1f, 9.0f};  // clamps like the hash grid
+  const float clamped[3] = {-1.99f, 0.1f, 1.99f};
+  BOOST_TEST(g.cell_of(outside) == g.cell_of(clamped));
+  g.update({3, 4}, {0.0f, 0.05f}, 0.5f);
+  g.refresh();
+  BOOST_TEST(!g.occupied[3]);  // evaluated empty
+  BOOST_TEST(!g.occupied[4]);  // 0.05 is under the threshold 0.1026
+  g.update({4}, {g.threshold() * 3}, 0.5f);
+  g.update({4}, {0.0f}, 0.5f);  // decays to 1.5 x threshold: still occupied
+  g.refresh();
+  BOOST_TEST(g.occupied[4]);
+  g.update({4}, {0.0f}, 0.5f);  // 0.75 x threshold
+  g.refresh();
+  BOOST_TEST(!g.occupied[4]);
+}
+
+BOOST_AUTO_TEST_CASE(pack_gather_scatter_match_reference) {
+  auto sel = two_grid_select();
+  const auto pos = random_floats(B * M * D, -1.2f, 1.2f, 11);
+  const auto w = random_floats(B * E * H, -1.0f, 1.0f, 12);
+  const auto bias = random_floats(B * H, -0.5f, 0.5f, 13);
+  Graph g;
+  PackedMlp n = packed_mlp(g, sel, false);
+  g.keep(n.out);
+  Executor ex(test::runtime(), g);
+  ex.set(n.positions, pos);
+  ex.set(n.w, w);
+  ex.set(n.bias, bias);
+  ex.forward();
+  const auto kept = reference_kept(pos, *sel);
+  BOOST_TEST(sel->kept == kept[0].size() + kept[1].size());
+  BOOST_TEST(sel->tested == B * M);
+  // Both grids keep about half of the samples: a packing that kept all or none would not
+  // test anything.
+  for (const auto& k : kept) BOOST_TEST((k.size() > M / 4 && k.size() < 3 * M / 4));
+  std::vector<double> ref(B * M * H, -7.0);
+  for (size_t b = 0; b < B; ++b)
+    for (size_t m : kept[b])
+      for (size_t o = 0; o < H; ++o) {
+        double h = bias[b * H + o];
+        for (size_t j = 0; j < E; ++j) h += encoded(pos, b * M + m, j) * w[(b * E + j) * H + o];
+        ref[(b * M + m) * H + o] = std::max(0.0, h);
+      }
+  test::expect_close(ex.get(n.out), ref, 1e-5, 1e-5, "packed MLP scattered back");
+}
+
+BOOST_AUTO_TEST_CASE(all_empty_gives_the_fill) {
+  auto sel = two_grid_select();
+  auto grids = std::make_shared<std::vector<OccupancyGrid>>(*sel->grids);
+  for (auto& gr : *grids) {
+    std::fill(gr.density.begin(), gr.density.end(), 0.0f);
+    gr.refresh();
+  }
+  sel->grids = grids;
+  Graph g;
+  PackedMlp n = packed_mlp(g, sel, false);
+  g.keep(n.out);
+  Executor ex(test::runtime(), g);
+  ex.set(n.positions, random_floats(B * M * D, -1.0f, 1.0f, 21));
+  ex.set(n.w, random_floats(B * E * H, -1.0f, 1.0f, 22));
+  ex.set(n.bias, random_floats(B * H, -0.5f, 0.5f, 23));
+  ex.forward();
+  BOOST_TEST(sel->kept == 0u);
+  test::expect_close(ex.get(n.out), std::vector<double>(B * M * H, -7.0), 0, 0, "fill of an empty scene");
+}
+
+BOOST_AUTO_TEST_CASE(disabled_select_keeps_every_sample) {
+  auto sel = two_grid_select();
+  sel->enabled = false;
+  Graph g;
+  PackedMlp n = packed_mlp(g, sel, false);
+  g.keep(n.out);
+  Executor ex(test::runtime(), g);
+  ex.set(n.positions, random_floats(B * M * D, -1.0f, 1.0f, 31));
+  ex.set(n.w, random_floats(B * E * H, -1.0f, 1.0f, 32));
+  ex.set(n.bias, random_floats(B * H, 0.5f, 1.0f, 33));  // ReLU stays open: no fill anywhere
+  ex.forward();
+  BOOST_TEST(sel->kept == B * M);
+  for (float v : ex.get(n.out)) BOOST_TEST(v != -7.0f);
+}
+
+BOOST_AUTO_TEST_CASE(gradients_flow_through_packed_rows) {
+  auto sel = two_grid_select();
+  auto pos = random_floats(B * M * D, -1.2f, 1.2f, 41);
+  auto w = random_floats(B * E * H, -1.0f, 1.0f, 42);
+  auto bias = random_floats(B * H, -0.5f, 0.5f, 43);
+  // Keep every pre-activation 0.05 from the ReLU kink the stencil would cross.
+  for (size_t i = 0; i < 50; ++i) {
+    bool moved = false;
+    for (size_t b = 0; b < B; ++b)
+      for (size_t m = 0; m < M; ++m)
+        for (size_t o = 0; o < H; ++o) {
+          double h = bias[b * H + o];
+          for (size_t j = 0; j < E; ++j) h += encoded(pos, b * M + m, j) * w[(b * E + j) * H + o];
+          if (std::fabs(h) < 0.05) {
+            pos[(b * M + m) * 3] = std::fmod(pos[(b * M + m) * 3] + 0.37f, 1.2f);
+            moved = true;
+          }
+        }
+    if (!moved) break;
+  }
+  test::GradCheckOptions o;  // step 1e-2 moves a pre-activation by <= 1e-2 (|inputs| <= 1.2)
+  const double err = test::check_gradients(
+      [&](Graph& g) {
+        PackedMlp n = packed_mlp(g, sel, true);
+        return test::OpUnderTest{{n.positions, n.w, n.bias}, n.out};
+      },
+      {pos, w, bias}, o);
+  BOOST_TEST(err <= 1.0);
+}
+
+BOOST_AUTO_TEST_CASE(empty_raw_fill_is_inert) {
+  // A dropped sample must add no density and take no blend share: ReLU and sigmoid of the fill.
+  const auto f = empty_raw_fill(kRawChannels);
+  BOOST_TEST(f.size() == size_t(kRawChannels));
+  BOOST_TEST(std::max(0.0f, f[kRawSigma] + 10.0f) == 0.0f);  // even with 10 sigma of noise
+  BOOST_TEST(1.0f / (1.0f + std::exp(-f[kRawBlend])) == 0.0f);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
