@@ -85,6 +85,17 @@ PackedMlp packed_mlp(Graph& g, std::shared_ptr<PackSelect> s, bool grad) {
   return n;
 }
 
+// The packed MLP's dense output for these positions, weights and biases.
+std::vector<float> run_packed(std::shared_ptr<PackSelect> s, const std::vector<float>& pos,
+                              const std::vector<float>& w, const std::vector<float>& bias) {
+  return test::run_forward(
+      [&](Graph& g) {
+        PackedMlp n = packed_mlp(g, s, false);
+        return test::OpUnderTest{{n.positions, n.w, n.bias}, n.out};
+      },
+      {pos, w, bias});
+}
+
 double encoded(const std::vector<float>& pos, size_t row, size_t j) {
   // [p, sin(2^0 p), cos(2^0 p), sin(2^1 p), cos(2^1 p)] then p again.
   if (j >= D * (1 + 2 * F)) return pos[row * 3 + (j - D * (1 + 2 * F))];
@@ -130,14 +141,7 @@ BOOST_AUTO_TEST_CASE(pack_gather_scatter_match_reference) {
   const auto pos = random_floats(B * M * D, -1.2f, 1.2f, 11);
   const auto w = random_floats(B * E * H, -1.0f, 1.0f, 12);
   const auto bias = random_floats(B * H, -0.5f, 0.5f, 13);
-  Graph g;
-  PackedMlp n = packed_mlp(g, sel, false);
-  g.keep(n.out);
-  Executor ex(test::runtime(), g);
-  ex.set(n.positions, pos);
-  ex.set(n.w, w);
-  ex.set(n.bias, bias);
-  ex.forward();
+  const auto out = run_packed(sel, pos, w, bias);
   const auto kept = reference_kept(pos, *sel);
   BOOST_TEST(sel->kept == kept[0].size() + kept[1].size());
   BOOST_TEST(sel->tested == B * M);
@@ -152,7 +156,7 @@ BOOST_AUTO_TEST_CASE(pack_gather_scatter_match_reference) {
         for (size_t j = 0; j < E; ++j) h += encoded(pos, b * M + m, j) * w[(b * E + j) * H + o];
         ref[(b * M + m) * H + o] = std::max(0.0, h);
       }
-  test::expect_close(ex.get(n.out), ref, 1e-5, 1e-5, "packed MLP scattered back");
+  test::expect_close(out, ref, 1e-5, 1e-5, "packed MLP scattered back");
 }
 
 BOOST_AUTO_TEST_CASE(all_empty_gives_the_fill) {
@@ -163,31 +167,20 @@ BOOST_AUTO_TEST_CASE(all_empty_gives_the_fill) {
     gr.refresh();
   }
   sel->grids = grids;
-  Graph g;
-  PackedMlp n = packed_mlp(g, sel, false);
-  g.keep(n.out);
-  Executor ex(test::runtime(), g);
-  ex.set(n.positions, random_floats(B * M * D, -1.0f, 1.0f, 21));
-  ex.set(n.w, random_floats(B * E * H, -1.0f, 1.0f, 22));
-  ex.set(n.bias, random_floats(B * H, -0.5f, 0.5f, 23));
-  ex.forward();
+  const auto out = run_packed(sel, random_floats(B * M * D, -1.0f, 1.0f, 21),
+                              random_floats(B * E * H, -1.0f, 1.0f, 22), random_floats(B * H, -0.5f, 0.5f, 23));
   BOOST_TEST(sel->kept == 0u);
-  test::expect_close(ex.get(n.out), std::vector<double>(B * M * H, -7.0), 0, 0, "fill of an empty scene");
+  test::expect_close(out, std::vector<double>(B * M * H, -7.0), 0, 0, "fill of an empty scene");
 }
 
 BOOST_AUTO_TEST_CASE(disabled_select_keeps_every_sample) {
   auto sel = two_grid_select();
   sel->enabled = false;
-  Graph g;
-  PackedMlp n = packed_mlp(g, sel, false);
-  g.keep(n.out);
-  Executor ex(test::runtime(), g);
-  ex.set(n.positions, random_floats(B * M * D, -1.0f, 1.0f, 31));
-  ex.set(n.w, random_floats(B * E * H, -1.0f, 1.0f, 32));
-  ex.set(n.bias, random_floats(B * H, 0.5f, 1.0f, 33));  // ReLU stays open: no fill anywhere
-  ex.forward();
+  // Biases in [0.5, 1] and |inputs| <= 1 keep most ReLUs open; the fill -7 must appear nowhere.
+  const auto out = run_packed(sel, random_floats(B * M * D, -1.0f, 1.0f, 31),
+                              random_floats(B * E * H, -1.0f, 1.0f, 32), random_floats(B * H, 0.5f, 1.0f, 33));
   BOOST_TEST(sel->kept == B * M);
-  for (float v : ex.get(n.out)) BOOST_TEST(v != -7.0f);
+  for (float v : out) BOOST_TEST(v != -7.0f);
 }
 
 BOOST_AUTO_TEST_CASE(gradients_flow_through_packed_rows) {
