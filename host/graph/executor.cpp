@@ -52,9 +52,16 @@ void ExecContext::set_extent(int e, size_t rows) {
 
 size_t Executor::live_numel(TensorId t) const {
   const TensorInfo& info = graph_.tensor(t);
-  if (info.extent < 0) return info.shape.numel();
-  const size_t d = info.shape.dims[info.shape.row_dim()];
-  return info.shape.numel() / d * extents_.at(info.extent);
+  return live_rows(info, extents_, graph_, info.shape.numel());
+}
+
+void copy_parameters(Executor& to, Executor& from, const std::string& prefix) {
+  for (Tensor p : to.graph().parameters()) {
+    const std::string& name = p.info().name;
+    if (name.rfind(prefix, 0) != 0) continue;
+    for (Tensor q : from.graph().parameters())
+      if (q.info().name == name) to.set(p, from.get(q));
+  }
 }
 
 // ---- schedule and memory ---------------------------------------------------------------------

@@ -80,8 +80,8 @@ ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeom
       if (it == checkpoint.arrays.end()) break;
       if (it->shape.size() != 3 || it->shape[0] != it->shape[1] || it->shape[1] != it->shape[2])
         throw Error("checkpoint array '" + name + "' is not a cubic occupancy grid");
-      const float bound = scene_field(config.field, geometry).hash.bound;
-      OccupancyGrid g(static_cast<int>(it->shape[0]), bound > 0 ? bound : geometry.extent, config.occupancy_alpha);
+      OccupancyGrid g(static_cast<int>(it->shape[0]), scene_field(config.field, geometry).hash.bound,
+                      config.occupancy_alpha);
       g.density = it->values;
       g.refresh();
       grids->push_back(std::move(g));

@@ -40,7 +40,7 @@ float unit(std::mt19937& rng) { return static_cast<float>(rng() >> 8) * (1.0f / 
 
 }  // namespace
 
-void OccupancyUpdater::update(Executor& source, Graph& source_graph, std::vector<OccupancyGrid>& grids,
+void OccupancyUpdater::update(Executor& source, std::vector<OccupancyGrid>& grids,
                               bool objects, bool full, std::mt19937& rng) {
   const int K = objects ? static_cast<int>(grids.size()) - 1 : 0;
   if (!graph_ || graph_objects_ != (K > 0)) {
@@ -49,9 +49,7 @@ void OccupancyUpdater::update(Executor& source, Graph& source_graph, std::vector
     exec_ = std::make_unique<Executor>(rt_, graph_->graph);
     graph_objects_ = K > 0;
   }
-  for (Tensor p : graph_->graph.parameters())
-    for (Tensor q : source_graph.parameters())
-      if (q.info().name == p.info().name) exec_->set(p, source.get(q));
+  copy_parameters(*exec_, source);
 
   const size_t P = static_cast<size_t>(points_);
   // Static cells once each; object cells twice, at two random times.

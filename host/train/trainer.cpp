@@ -62,9 +62,9 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   regions_.reserve(scene.frames.size());
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
   if (config_.occupancy) {
-    const float bound = scene_field(config_.field, geometry_).hash.bound;
-    grids_ = std::make_shared<std::vector<OccupancyGrid>>(make_occupancy_grids(
-        geometry_.num_objects, config_.occupancy_res, bound > 0 ? bound : geometry_.extent, config_.occupancy_alpha));
+    grids_ = std::make_shared<std::vector<OccupancyGrid>>(
+        make_occupancy_grids(geometry_.num_objects, config_.occupancy_res,
+                             scene_field(config_.field, geometry_).hash.bound, config_.occupancy_alpha));
     std::vector<double> times;
     for (const Frame& f : scene.frames) times.push_back(f.time);
     occupancy_ = std::make_unique<OccupancyUpdater>(rt_, config_.field, geometry_, times);
@@ -97,14 +97,7 @@ void Trainer::ensure_phase() {
   eo.seed = config_.seed;
   eo.profile = profile_;
   auto e = std::make_unique<Executor>(rt_, g->graph, eo);
-  if (exec_) {
-    for (Tensor p : g->graph.parameters()) {
-      const std::string& name = p.info().name;
-      if (name.rfind(kStaticPrefix, 0) != 0) continue;
-      for (Tensor q : graph_->graph.parameters())
-        if (q.info().name == name) e->set(p, exec_->get(q));
-    }
-  }
+  if (exec_) copy_parameters(*e, *exec_, kStaticPrefix);
   exec_.reset();
   graph_ = std::move(g);
   exec_ = std::move(e);
@@ -231,7 +224,7 @@ void Trainer::maybe_update_occupancy(long phase_step) {
   if (since % c.occupancy_every != 0) return;
   // Its own generator, seeded by the step: resume restores the grids, not another stream.
   std::mt19937 rng(c.seed * 2654435761u + static_cast<unsigned>(step_));
-  occupancy_->update(*exec_, graph_->graph, *grids_, graph_joint_, since == 0, rng);
+  occupancy_->update(*exec_, *grids_, graph_joint_, since == 0, rng);
 }
 
 void Trainer::run(const std::function<void(const TrainProgress&)>& progress, long until_step) {

@@ -92,6 +92,8 @@ class Executor {
   // Elements in use of a tensor: its numel, scaled down for a dynamic extent.
   size_t live_numel(TensorId t) const;
 
+  Graph& graph() const { return graph_; }
+
   // All parameters live in one arena and their gradients in a second one with the same
   // layout, so an optimiser updates everything with one kernel.
   cl_mem parameter_arena() const { return param_arena_.get(); }
@@ -136,5 +138,9 @@ class Executor {
   std::map<std::string, OpTiming> timings_;
   std::vector<size_t> extents_;  // live rows per graph extent
 };
+
+// Copies every parameter of `from` whose name starts with `prefix` into the parameter of `to`
+// with the same name (graphs built by the same builders share names); the others stay.
+void copy_parameters(Executor& to, Executor& from, const std::string& prefix = "");
 
 }  // namespace nova

@@ -21,9 +21,9 @@ class OccupancyUpdater {
   ~OccupancyUpdater();
 
   // Updates grids[0] (static) and, when `objects`, grids[1..K] from the weights of `source`
-  // (an executor of a graph with the same parameter names). `full`: every cell, else
+  // (an executor of a graph built by the same field builders, copied by name). `full`: every cell, else
   // 1/16 of them. Object cells are probed at two random times per visit.
-  void update(Executor& source, Graph& source_graph, std::vector<OccupancyGrid>& grids,
+  void update(Executor& source, std::vector<OccupancyGrid>& grids,
               bool objects, bool full, std::mt19937& rng);
 
  private:
