@@ -5,7 +5,9 @@
 // XOR_d (v_d * prime_d) mod T (T a power of two).
 //
 // Layout: positions [B, M, D]; table [B, L, T, F]; out [B, M, L * F]; res [L] (floats that
-// hold integers). D (HG_DIMS, <= 4: xyz or xyzt) and F (HG_FEATURES, <= 8) are build options,
+// hold integers). With D = 4 the last coordinate is time: it spans [-1, 1] (inv_bound_t = 1)
+// at res_t[l] cells, which may be coarser than space so that the fine levels are shared by
+// neighbouring frames (a monocular video sees each time from one camera only). D (HG_DIMS, <= 4: xyz or xyzt) and F (HG_FEATURES, <= 8) are build options,
 // so the corner and feature loops unroll (3x faster on PoCL than runtime bounds).
 //
 // The backward writes the table gradient without atomics, one work-item per (network, level)
@@ -29,17 +31,29 @@ inline void hg_cell(float x, float inv_bound, float res, uint* cell, float* frac
   *frac = u - f;
 }
 
-inline int hg_dense(uint res, uint table_size) {
+// Cells along dimension d: time (the 4th) has its own count.
+inline uint hg_res_of(uint d, uint res, uint res_t) { return (HG_DIMS == 4 && d == 3) ? res_t : res; }
+
+inline int hg_dense(uint res, uint res_t, uint table_size) {
   ulong n = 1;
   for (uint d = 0; d < HG_DIMS; ++d) {
-    n *= (ulong)res + 1;
+    n *= (ulong)hg_res_of(d, res, res_t) + 1;
     if (n > table_size) return 0;
   }
   return 1;
 }
 
+// Cell and fraction of every coordinate of point p at level resolutions (res, res_t).
+inline void hg_cells(__global const float* p, float inv_bound, float inv_bound_t, float res,
+                     float res_t, uint* cell, float* frac) {
+  for (uint d = 0; d < HG_DIMS; ++d) {
+    const int is_t = HG_DIMS == 4 && d == 3;
+    hg_cell(p[d], is_t ? inv_bound_t : inv_bound, is_t ? res_t : res, &cell[d], &frac[d]);
+  }
+}
+
 // Table row of the vertex `corner` (bit d: +1 along dimension d) of the cell, and its weight.
-inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res,
+inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res, uint res_t,
                       uint table_size, int dense, float* weight) {
   const uint primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
   uint index = 0, stride = 1;
@@ -50,7 +64,7 @@ inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res
     w *= bit ? frac[d] : 1.0f - frac[d];
     if (dense) {
       index += v * stride;
-      stride *= res + 1;
+      stride *= hg_res_of(d, res, res_t) + 1;
     } else {
       index ^= v * primes[d];
     }
@@ -61,24 +75,25 @@ inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res
 
 // One work-item per (network, level, row), rows fastest.
 __kernel void hashgrid_forward(__global const float* positions, __global const float* table,
-                               __constant float* res, __global float* out, uint nets,
-                               uint rows, uint levels, uint table_size, float inv_bound) {
+                               __constant float* res, __constant float* res_t,
+                               __global float* out, uint nets, uint rows, uint levels,
+                               uint table_size, float inv_bound, float inv_bound_t) {
   const uint i = get_global_id(0);
   if (i >= nets * levels * rows) return;
   const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
-  const uint resolution = (uint)res[l];
-  const int dense = hg_dense(resolution, table_size);
+  const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
+  const int dense = hg_dense(resolution, resolution_t, table_size);
   uint cell[HG_DIMS];
   float frac[HG_DIMS];
-  __global const float* p = positions + ((size_t)b * rows + r) * HG_DIMS;
-  for (uint d = 0; d < HG_DIMS; ++d) hg_cell(p[d], inv_bound, res[l], &cell[d], &frac[d]);
+  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
+           res_t[l], cell, frac);
 
   float acc[HG_FEATURES];
   for (uint f = 0; f < HG_FEATURES; ++f) acc[f] = 0.0f;
   __global const float* t = table + ((size_t)b * levels + l) * table_size * HG_FEATURES;
   for (uint c = 0; c < HG_CORNERS; ++c) {
     float w;
-    const uint v = hg_vertex(cell, frac, c, resolution, table_size, dense, &w);
+    const uint v = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &w);
     for (uint f = 0; f < HG_FEATURES; ++f) acc[f] += w * t[(size_t)v * HG_FEATURES + f];
   }
   __global float* o = out + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
@@ -87,14 +102,15 @@ __kernel void hashgrid_forward(__global const float* positions, __global const f
 
 // d table: one work-item per (network, level).
 __kernel void hashgrid_backward(__global const float* positions, __global const float* dout,
-                                __constant float* res, __global float* dtable, uint nets,
-                                uint rows, uint levels, uint table_size, float inv_bound,
+                                __constant float* res, __constant float* res_t,
+                                __global float* dtable, uint nets, uint rows, uint levels,
+                                uint table_size, float inv_bound, float inv_bound_t,
                                 int accumulate) {
   const uint i = get_global_id(0);
   if (i >= nets * levels) return;
   const uint l = i % levels, b = i / levels;
-  const uint resolution = (uint)res[l];
-  const int dense = hg_dense(resolution, table_size);
+  const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
+  const int dense = hg_dense(resolution, resolution_t, table_size);
   __global float* g = dtable + ((size_t)b * levels + l) * table_size * HG_FEATURES;
   if (!accumulate)
     for (size_t k = 0; k < (size_t)table_size * HG_FEATURES; ++k) g[k] = 0.0f;
@@ -102,12 +118,12 @@ __kernel void hashgrid_backward(__global const float* positions, __global const 
   for (uint r = 0; r < rows; ++r) {
     uint cell[HG_DIMS];
     float frac[HG_DIMS];
-    __global const float* p = positions + ((size_t)b * rows + r) * HG_DIMS;
-    for (uint d = 0; d < HG_DIMS; ++d) hg_cell(p[d], inv_bound, res[l], &cell[d], &frac[d]);
+    hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
+             res_t[l], cell, frac);
     __global const float* dy = dout + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
     for (uint c = 0; c < HG_CORNERS; ++c) {
       float w;
-      const uint v = hg_vertex(cell, frac, c, resolution, table_size, dense, &w);
+      const uint v = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &w);
       for (uint f = 0; f < HG_FEATURES; ++f) g[(size_t)v * HG_FEATURES + f] += w * dy[f];
     }
   }

@@ -1,5 +1,5 @@
 // The hash encoding against a float64 host reference (forward, dense and hashed levels,
-// clamping, one and several networks, 3-D and 4-D inputs) and central finite differences of
+// clamping, one and several networks, 3-D and 4-D inputs, time with fewer cells than space) and central finite differences of
 // the device forward (table gradient, also when the table is read twice).
 //
 // Tolerances: the kernel's grid coordinate u = (x / bound + 1) / 2 * res carries a few float32
@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
 #include "harness.hpp"
 #include "nova/error.hpp"
@@ -31,21 +32,27 @@ namespace {
 // Float64 reference of one network: positions [M, D], table [L, T, F] -> [M, L * F].
 std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, size_t dims,
                                    const std::vector<float>& table, const HashGridConfig& c) {
-  const std::vector<float> res = hash_grid_resolutions(c);
+  const std::vector<float> res = hash_grid_resolutions(c), res_t = hash_grid_time_resolutions(c);
   const uint64_t T = uint64_t{1} << c.log2_size;
   const uint32_t primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
   std::vector<double> out(rows * c.levels * c.features, 0.0);
   for (size_t r = 0; r < rows; ++r) {
     for (int l = 0; l < c.levels; ++l) {
-      const double R = res[l];
+      // The 4th coordinate is time: on [-1, 1] with its own cell count.
+      double R[4], bound[4];
+      for (size_t d = 0; d < dims; ++d) {
+        const bool time = d == 3;
+        R[d] = time ? res_t[l] : res[l];
+        bound[d] = time ? 1.0 : c.bound;
+      }
       double vertices = 1;
-      for (size_t d = 0; d < dims; ++d) vertices *= R + 1;
+      for (size_t d = 0; d < dims; ++d) vertices *= R[d] + 1;
       const bool dense = vertices <= static_cast<double>(T);
       uint32_t cell[4];
       double frac[4];
       for (size_t d = 0; d < dims; ++d) {
-        const double u = std::clamp(0.5 * (pos[r * dims + d] / c.bound + 1.0), 0.0, 1.0) * R;
-        const double f = std::min(std::floor(u), R - 1);
+        const double u = std::clamp(0.5 * (pos[r * dims + d] / bound[d] + 1.0), 0.0, 1.0) * R[d];
+        const double f = std::min(std::floor(u), R[d] - 1);
         cell[d] = static_cast<uint32_t>(f);
         frac[d] = u - f;
       }
@@ -57,7 +64,7 @@ std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, s
           const uint32_t bit = (corner >> d) & 1u, v = cell[d] + bit;
           w *= bit ? frac[d] : 1 - frac[d];
           index += v * stride;
-          stride *= static_cast<uint64_t>(R) + 1;
+          stride *= static_cast<uint64_t>(R[d]) + 1;
           h ^= v * primes[d];  // uint32 wrap-around, as the kernel
         }
         const uint64_t row = dense ? index : (h & (T - 1));
@@ -115,7 +122,10 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
   c.min_resolution = 2;
   c.max_resolution = 40;
   c.bound = 1.5f;
-  for (size_t dims : {3, 4}) {
+  // Time (the 4th coordinate) as space, then capped at 3 cells: res 5 becomes dense
+  // (6^3 * 4 <= 1024), so the capped stride is checked on dense levels too.
+  for (auto [dims, time_cap] : {std::pair<size_t, int>{3, 0}, {4, 0}, {4, 3}}) {
+    c.time_max_resolution = time_cap;
     for (size_t nets : {1, 2}) {
       const size_t rows = 37;
       const size_t tsize = hash_grid_table_shape(c).numel();
@@ -129,7 +139,7 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
         const auto r = hash_reference(pb, rows, dims, tb, c);
         ref.insert(ref.end(), r.begin(), r.end());
       }
-      BOOST_TEST_CONTEXT("dims " << dims << " networks " << nets) {
+      BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap << " networks " << nets) {
         const double atol = dims * 2.0 * 4.0 * c.max_resolution * std::ldexp(1.0, -24) + 2e-6;
         expect_close(out, ref, atol, 1e-6, "hash encoding");
       }
@@ -146,10 +156,11 @@ BOOST_AUTO_TEST_CASE(table_gradient) {
   c.log2_size = 4;
   c.min_resolution = 2;
   c.max_resolution = 7;
-  for (size_t dims : {3, 4}) {
+  for (auto [dims, time_cap] : {std::pair<size_t, int>{3, 0}, {4, 0}, {4, 2}}) {
+    c.time_max_resolution = time_cap;
     const size_t nets = 2, rows = 23;
     const size_t tsize = hash_grid_table_shape(c).numel();
-    BOOST_TEST_CONTEXT("dims " << dims) {
+    BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap) {
       check_gradients(
           [&](Graph& g) {
             Tensor p = g.input("p", Shape{nets, rows, dims});
@@ -192,6 +203,7 @@ BOOST_AUTO_TEST_CASE(bad_configurations_are_refused) {
   refused([](HashGridConfig& c) { c.log2_size = 30; });
   refused([](HashGridConfig& c) { c.max_resolution = c.min_resolution - 1; });
   refused([](HashGridConfig& c) { c.bound = 0.0f; });
+  refused([](HashGridConfig& c) { c.time_max_resolution = -1; });
   Graph g;
   Tensor p = g.input("p", Shape{4, 5});
   BOOST_CHECK_THROW(hash_encoding(p, hash_grid_table(g, "t", HashGridConfig{}), HashGridConfig{}),

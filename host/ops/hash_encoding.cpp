@@ -15,7 +15,7 @@ constexpr int kMaxDims = 4, kMaxFeatures = 8, kMaxLevels = 32;
 class HashEncodingOp final : public Op {
  public:
   HashEncodingOp(size_t nets, size_t rows, size_t dims, const HashGridConfig& c)
-      : nets_(nets), rows_(rows), dims_(dims), c_(c), res_(hash_grid_resolutions(c)) {}
+      : nets_(nets), rows_(rows), dims_(dims), c_(c), res_(hash_grid_resolutions(c)), res_t_(hash_grid_time_resolutions(c)) {}
   std::string type() const override { return "hash_encoding"; }
 
   void forward(ExecContext& ctx) override {
@@ -23,9 +23,9 @@ class HashEncodingOp final : public Op {
     if (rows == 0) return;
     upload_resolutions(ctx.rt);
     ctx.launch("hashgrid", "hashgrid_forward", build_options())
-        .arg(ctx.in(0)).arg(ctx.in(1)).arg(res_buffer_).arg(ctx.out(0))
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.out(0))
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
-        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound)
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound).arg(1.0f)
         .run(nets_ * rows * c_.levels);
   }
 
@@ -39,9 +39,9 @@ class HashEncodingOp final : public Op {
     }
     upload_resolutions(ctx.rt);
     ctx.launch("hashgrid", "hashgrid_backward", build_options())
-        .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(dtable)
+        .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(dtable)
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(ctx.in_rows(0, rows_), "rows"))
-        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound)
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound).arg(1.0f)
         .arg(static_cast<int>(ctx.accumulate_in(1)))
         .run(nets_ * c_.levels);
   }
@@ -56,12 +56,13 @@ class HashEncodingOp final : public Op {
   }
   void upload_resolutions(Runtime& rt) {
     if (!res_buffer_.get()) res_buffer_ = rt.upload_floats(res_);
+    if (!res_t_buffer_.get()) res_t_buffer_ = rt.upload_floats(res_t_);
   }
 
   size_t nets_, rows_, dims_;
   HashGridConfig c_;
-  std::vector<float> res_;
-  Buffer res_buffer_;
+  std::vector<float> res_, res_t_;
+  Buffer res_buffer_, res_t_buffer_;
 };
 
 }  // namespace
@@ -80,6 +81,9 @@ void validate(const HashGridConfig& c) {
          std::to_string(c.min_resolution) + ", max " + std::to_string(c.max_resolution));
   if (!(c.bound > 0.0f) || !std::isfinite(c.bound))
     fail("bound must be a positive number, got " + std::to_string(c.bound));
+  if (c.time_max_resolution < 0 || c.time_max_resolution > (1 << 20))
+    fail("time resolution must be in [0, 2^20] (0: as space), got " +
+         std::to_string(c.time_max_resolution));
 }
 
 std::vector<float> hash_grid_resolutions(const HashGridConfig& c) {
@@ -92,6 +96,13 @@ std::vector<float> hash_grid_resolutions(const HashGridConfig& c) {
   for (int l = 0; l < c.levels; ++l)
     res[l] = static_cast<float>(
         std::max(1.0, std::floor(c.min_resolution * std::pow(growth, l) + 1e-9)));
+  return res;
+}
+
+std::vector<float> hash_grid_time_resolutions(const HashGridConfig& c) {
+  std::vector<float> res = hash_grid_resolutions(c);
+  if (c.time_max_resolution > 0)
+    for (float& r : res) r = std::min(r, static_cast<float>(c.time_max_resolution));
   return res;
 }
 

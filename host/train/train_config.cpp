@@ -122,6 +122,8 @@ std::vector<ConfigOption> make_options() {
                          [](TrainConfig& c) -> int& { return c.field.hash.min_resolution; }));
   o.push_back(int_option("hash-max-res", "hash grid: cells per dimension of the finest level", 1, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.field.hash.max_resolution; }));
+  o.push_back(int_option("hash-time-res", "hash grid of the object NeRFs: most cells along time per level (time spans [-1, 1]; 0: as space)",
+                         0, 1 << 20, [](TrainConfig& c) -> int& { return c.field.hash.time_max_resolution; }));
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: 1 in NDC, else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,

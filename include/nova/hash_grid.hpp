@@ -19,6 +19,10 @@ struct HashGridConfig {
   int min_resolution = 16;   // coarsest grid: cells per dimension
   int max_resolution = 512;  // finest grid
   float bound = 1.0f;        // encodes [-bound, bound]^D; points outside are clamped to it
+  // With D = 4 the 4th coordinate is time, on [-1, 1] whatever `bound`, with at most this
+  // many cells per level (0: as space). A monocular video sees each time from one camera:
+  // time cells shared by neighbouring frames tie the object NeRFs to several viewpoints.
+  int time_max_resolution = 0;
 
   int outputs() const { return levels * features; }
 };
@@ -28,6 +32,9 @@ void validate(const HashGridConfig& c);
 
 // Cells per dimension of each level: floor(min * g^l), g = (max / min)^(1 / (L - 1)).
 std::vector<float> hash_grid_resolutions(const HashGridConfig& c);
+
+// Cells along time of each level: min(res_l, time_max_resolution), or res_l when it is 0.
+std::vector<float> hash_grid_time_resolutions(const HashGridConfig& c);
 
 // Shape of the tables of `networks` encodings: [L, T, F], or [networks, L, T, F] when > 1.
 Shape hash_grid_table_shape(const HashGridConfig& c, size_t networks = 1);
