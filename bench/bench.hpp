@@ -14,6 +14,7 @@ int mlp(const Args& args);
 int render(const Args& args);
 #ifdef NOVA_BENCH_IO
 int tradeoff(const Args& args);  // needs nova_io (scenes, metrics, the plot)
+int view(const Args& args);      // needs nova_io (the run's scene)
 #endif
 
 struct Benchmark {

@@ -1,7 +1,8 @@
 // Empty-space skipping: the occupancy grid's geometry and update rule, and the packed-sample
 // ops (pack_occupied, gather_rows, scatter_rows) with the row-wise ops that run on the live
 // rows of a dynamic extent (positional_encoding, concat, linear, bias_act), against float64
-// host references and central finite differences.
+// host references and central finite differences; and the sample ranges and open rays that
+// early ray termination packs on top of the grids.
 //
 // Sizes: M = 1009 samples (prime) per batch, so every launch is ragged; these ops are left
 // out of test_odd_sizes' sweep for that reason.
@@ -12,10 +13,13 @@
 // gradient's scale) with pre-activations kept 0.05 away from the ReLU kink.
 #include <boost/test/unit_test.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 
 #include "harness.hpp"
+#include "nova/error.hpp"
 #include "nova/executor.hpp"
 #include "nova/occupancy.hpp"
 #include "nova/ops.hpp"
@@ -66,6 +70,58 @@ std::vector<std::vector<size_t>> reference_kept(const std::vector<float>& pos, c
     }
   }
   return kept;
+}
+
+// Early termination's rules on top of the grids (PackSelect::samples_per_ray): sample index
+// m % S in [first, end) of rays m / S that are open. Plain integer logic, the reference of
+// the pack op's loop over rays and ranges.
+bool in_sample_range(const PackSelect& s, size_t m) {
+  if (s.samples_per_ray == 0) return true;
+  const size_t i = m % s.samples_per_ray, r = m / s.samples_per_ray;
+  return i >= s.first_sample && i < s.end_sample && (s.open_rays.empty() || s.open_rays[r]);
+}
+
+// The kept rows of `rows` per batch: grids (when enabled) and the sample range.
+std::vector<std::vector<size_t>> reference_range_kept(const std::vector<float>& pos, const PackSelect& s,
+                                                      size_t rows) {
+  std::vector<std::vector<size_t>> kept(B);
+  for (size_t b = 0; b < B; ++b)
+    for (size_t m = 0; m < rows; ++m) {
+      bool keep = in_sample_range(s, m);
+      if (keep && s.enabled && s.grids) {
+        const OccupancyGrid& g = (*s.grids)[static_cast<size_t>(s.grid_of_batch[b])];
+        size_t c = 0;
+        for (int d = 2; d >= 0; --d) {
+          const double u = (double(pos[(b * rows + m) * 3 + d]) + 1.0) / 2.0 * g.resolution;
+          const int i = std::clamp(static_cast<int>(std::floor(u)), 0, g.resolution - 1);
+          c = c * static_cast<size_t>(g.resolution) + static_cast<size_t>(i);
+        }
+        keep = g.occupied[c];
+      }
+      if (keep) kept[b].push_back(m);
+    }
+  return kept;
+}
+
+// positions [B, rows, 3] packed, gathered and scattered back with fill -7: each kept row is
+// its own position, every other row -7.
+std::vector<float> run_pack_roundtrip(std::shared_ptr<PackSelect> s, const std::vector<float>& pos, size_t rows) {
+  return test::run_forward(
+      [&](Graph& g) {
+        Tensor x = g.input("positions", Shape{B, rows, D});
+        Packed p = pack_occupied(x, s);
+        return test::OpUnderTest{{x}, scatter_rows(gather_rows(x, p), p, std::vector<float>(D, -7.0f))};
+      },
+      {pos});
+}
+
+std::vector<double> roundtrip_reference(const std::vector<float>& pos, const std::vector<std::vector<size_t>>& kept,
+                                        size_t rows) {
+  std::vector<double> ref(B * rows * D, -7.0);
+  for (size_t b = 0; b < B; ++b)
+    for (size_t m : kept[b])
+      for (size_t d = 0; d < D; ++d) ref[(b * rows + m) * D + d] = pos[(b * rows + m) * D + d];
+  return ref;
 }
 
 struct PackedMlp {
@@ -181,6 +237,67 @@ BOOST_AUTO_TEST_CASE(disabled_select_keeps_every_sample) {
                               random_floats(B * E * H, -1.0f, 1.0f, 32), random_floats(B * H, 0.5f, 1.0f, 33));
   BOOST_TEST(sel->kept == B * M);
   for (float v : out) BOOST_TEST(v != -7.0f);
+}
+
+// The sample range and open rays of an early-termination pass, with and without grids: 97
+// rays (prime) of 12 samples, samples [3, 9) of about half of the rays. Moving floats: exact.
+BOOST_AUTO_TEST_CASE(sample_range_and_open_rays_match_reference) {
+  constexpr size_t rays = 97, S = 12, rows = rays * S;
+  const auto pos = random_floats(B * rows * D, -1.2f, 1.2f, 51);
+  std::vector<uint8_t> open(rays);
+  const auto coin = random_floats(rays, 0.0f, 1.0f, 52);
+  for (size_t r = 0; r < rays; ++r) open[r] = coin[r] < 0.5f;
+  for (bool grids : {true, false}) {
+    auto sel = two_grid_select();
+    if (!grids) sel->grids = nullptr;
+    sel->samples_per_ray = S;
+    sel->first_sample = 3;
+    sel->end_sample = 9;
+    sel->open_rays = open;
+    const auto out = run_pack_roundtrip(sel, pos, rows);
+    const auto kept = reference_range_kept(pos, *sel, rows);
+    BOOST_TEST(sel->kept == kept[0].size() + kept[1].size());
+    test::expect_close(out, roundtrip_reference(pos, kept, rows), 0, 0, grids ? "range on grids" : "range alone");
+    // Each rule must drop rows the others keep, or this case would not see it applied:
+    // without the open mask, or with the whole range, the reference keeps more.
+    PackSelect wider = *sel;
+    wider.open_rays.clear();
+    PackSelect longer = *sel;
+    longer.first_sample = 0;
+    longer.end_sample = S;
+    for (const PackSelect* other : {&wider, &longer}) {
+      const auto more = reference_range_kept(pos, *other, rows);
+      BOOST_TEST(more[0].size() + more[1].size() > sel->kept);
+    }
+    BOOST_TEST(sel->kept > 0u);
+  }
+}
+
+BOOST_AUTO_TEST_CASE(no_sample_range_ignores_open_rays) {
+  constexpr size_t rays = 97, S = 12, rows = rays * S;
+  auto sel = two_grid_select();
+  sel->enabled = false;
+  sel->open_rays.assign(rays, 0);  // read only with samples_per_ray > 0
+  const auto pos = random_floats(B * rows * D, -1.0f, 1.0f, 61);
+  const auto out = run_pack_roundtrip(sel, pos, rows);
+  BOOST_TEST(sel->kept == B * rows);
+  test::expect_close(out, test::to_double(pos), 0, 0, "everything kept");
+}
+
+BOOST_AUTO_TEST_CASE(bad_sample_ranges_are_refused) {
+  constexpr size_t rays = 97, S = 12, rows = rays * S;
+  const auto pos = random_floats(B * rows * D, -1.0f, 1.0f, 71);
+  auto expect_refused = [&](auto change) {
+    auto sel = two_grid_select();
+    sel->samples_per_ray = S;
+    sel->end_sample = S;
+    change(*sel);
+    BOOST_CHECK_THROW(run_pack_roundtrip(sel, pos, rows), Error);
+  };
+  expect_refused([](PackSelect& s) { s.end_sample = S + 1; });
+  expect_refused([](PackSelect& s) { s.first_sample = 5, s.end_sample = 4; });
+  expect_refused([](PackSelect& s) { s.open_rays.assign(rays - 1, 1); });
+  expect_refused([](PackSelect& s) { s.samples_per_ray = 7; });  // 1164 rows are no rays of 7
 }
 
 BOOST_AUTO_TEST_CASE(gradients_flow_through_packed_rows) {

@@ -2,6 +2,7 @@
 // image on held-out views), a resumed run is bit-identical to a straight one, and
 // checkpoints written for other networks are refused.
 #include <boost/test/unit_test.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -152,32 +153,56 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
   }
 }
 
+// A short run with occupancy grids (alpha 0.1 over one cell, so that it skips two thirds of
+// its samples), trained once for the skipping and the termination cases.
+struct GridRun {
+  Scene scene;
+  TrainConfig config;
+  Checkpoint checkpoint;
+  double kept = 1;  // samples kept in the last logged step
+};
+const GridRun& grid_run() {
+  static const GridRun run = [] {
+    GridRun g;
+    g.scene = tiny_scene();
+    TempDir dir("skip");
+    TrainConfig& c = g.config;
+    c = tiny_config(Encoding::HashGrid);
+    c.pretrain_steps = 100;
+    c.steps = 150;
+    c.occupancy = true;
+    c.occupancy_res = 32;
+    c.occupancy_warmup = 50;
+    c.occupancy_every = 16;
+    c.occupancy_alpha = 0.1f;
+    Trainer t(runtime(), g.scene, c, (dir / "run").string());
+    t.run([&](const TrainProgress& p) { g.kept = p.kept; });
+    g.checkpoint = t.checkpoint();
+    return g;
+  }();
+  return run;
+}
+
+double max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
+  double m = 0;
+  for (size_t i = 0; i < a.size(); ++i) m = std::max(m, std::fabs(static_cast<double>(a[i]) - b[i]));
+  return m;
+}
+
 // Empty-space skipping changes what a trained model renders by little: the same checkpoint
 // rendered with its occupancy grids and with every sample. A skipped sample lies in a cell
-// whose probed density stayed under the threshold (here alpha 0.1 over one cell, so that the
-// short run skips two thirds of its samples), and dropping it also drops its blend share,
-// which shifts colour between NeRFs where an occupied one shares the sample. Measured: 33% of
-// the samples kept, worst camera-0 view 34.8 dB between the two renders; the floor is 30 dB
-// (3% RMS), below which skipping would visibly change the picture.
+// whose probed density stayed under the threshold, and dropping it also drops its blend
+// share, which shifts colour between NeRFs where an occupied one shares the sample.
+// Measured: 33% of the samples kept, worst camera-0 view 34.8 dB between the two renders;
+// the floor is 30 dB (3% RMS), below which skipping would visibly change the picture.
 BOOST_AUTO_TEST_CASE(skipping_empty_space_keeps_the_render) {
-  const Scene scene = tiny_scene();
-  TempDir dir("skip");
-  TrainConfig c = tiny_config(Encoding::HashGrid);
-  c.pretrain_steps = 100;
-  c.steps = 150;
-  c.occupancy = true;
-  c.occupancy_res = 32;
-  c.occupancy_warmup = 50;
-  c.occupancy_every = 16;
-  c.occupancy_alpha = 0.1f;
-  Trainer t(runtime(), scene, c, (dir / "run").string());
-  double kept = 1;
-  t.run([&](const TrainProgress& p) { kept = p.kept; });
-  BOOST_TEST_MESSAGE("samples kept in the last logged step: " << kept);
-  BOOST_TEST(kept < 0.9);  // the grids must skip something for this test to mean anything
-  const Checkpoint ck = t.checkpoint();
-  ViewRenderer r(runtime(), c, ray_geometry(scene), ck);
+  const GridRun& g = grid_run();
+  const Scene& scene = g.scene;
+  BOOST_TEST_MESSAGE("samples kept in the last logged step: " << g.kept);
+  BOOST_TEST(g.kept < 0.9);  // the grids must skip something for this test to mean anything
+  ViewRenderer r(runtime(), g.config, ray_geometry(scene), g.checkpoint);
   BOOST_REQUIRE(r.skips_empty_space());
+  r.set_early_termination(false);  // this case measures skipping alone
   double worst = 1e9;
   for (const GroundTruthView& v : scene.gt_views) {
     if (v.kind != "cam0") continue;
@@ -194,6 +219,62 @@ BOOST_AUTO_TEST_CASE(skipping_empty_space_keeps_the_render) {
   }
   BOOST_TEST_MESSAGE("skipped against full render: worst PSNR " << worst << " dB");
   BOOST_TEST(worst > 30.0);
+}
+
+// Early ray termination against the same render without it (both skipping empty space). A
+// ray stops when its transmittance T_s after the checked sample is under 1e-4; what it
+// loses is T_s C_2 with every channel of C_2 (colour, acc, each mask) at most acc_2 <= 1,
+// so at most 1e-4 (depth: 1e-4 times the far depth). Rays that go on differ by float
+// rounding alone: T_s is read as 1 - acc_1 and the second segment restarts its product,
+// each off by at most ~S 2^-24 = 1.4e-6 relative (S = 24); the tolerance adds 1e-5 for it.
+// Rays never stopped must match to that 1e-5 (checked on the render with termination on and
+// a floor of 0, which splits every ray and stops none). Measured: 19290 of 30720 rays stop
+// at S/2; max |diff| rgb 5.4e-5, acc and masks 9.9e-5, depth 5.5e-5; split alone 3.0e-7;
+// the floor-0.5 mutation 1.7e-2.
+BOOST_AUTO_TEST_CASE(early_termination_keeps_the_render) {
+  const GridRun& g = grid_run();
+  const Scene& scene = g.scene;
+  const RayGeometry geo = ray_geometry(scene);
+  ViewRenderer r(runtime(), g.config, geo, g.checkpoint);
+  BOOST_REQUIRE(r.early_termination().on);  // on by default
+  const double tol = 1e-4 + 1e-5, noise = 1e-5, depth_scale = std::max(1.0f, geo.far);
+  size_t rays = 0, terminated = 0;
+  double worst_rgb = 0, worst_other = 0, worst_depth = 0, worst_split = 0, worst_early = 0;
+  for (const GroundTruthView& v : scene.gt_views) {
+    if (v.kind != "cam0") continue;
+    ViewRequest req;
+    req.camera = v.camera;
+    req.instances = scene_instances(scene.num_objects, v.time);
+    r.set_early_termination(false);
+    const ViewImage full = r.render(req);
+    r.set_early_termination(EarlyTermination{});
+    const ViewImage term = r.render(req);
+    rays += r.last_stats().rays;
+    terminated += r.last_stats().terminated;
+    worst_rgb = std::max(worst_rgb, max_abs_diff(term.rgb, full.rgb));
+    worst_other = std::max(worst_other, max_abs_diff(term.acc, full.acc));
+    for (size_t m = 0; m < full.masks.size(); ++m)
+      worst_other = std::max(worst_other, max_abs_diff(term.masks[m], full.masks[m]));
+    worst_depth = std::max(worst_depth, max_abs_diff(term.depth, full.depth) / depth_scale);
+    // Split, nothing stopped: the combination itself, to float rounding.
+    r.set_early_termination(EarlyTermination{true, 0.0f, {}});
+    const ViewImage split = r.render(req);
+    BOOST_TEST(r.last_stats().terminated == 0u);
+    worst_split = std::max({worst_split, max_abs_diff(split.rgb, full.rgb), max_abs_diff(split.acc, full.acc)});
+    // The mutation: rays stopped at a floor of 0.5 lose up to half their colour, which the
+    // comparison above must see (or it would pass whatever termination did).
+    r.set_early_termination(EarlyTermination{true, 0.5f, {}});
+    worst_early = std::max(worst_early, max_abs_diff(r.render(req).acc, full.acc));
+  }
+  BOOST_TEST_MESSAGE("early termination: " << terminated << " of " << rays << " rays stopped; max |diff| rgb "
+                     << worst_rgb << ", acc and masks " << worst_other << ", depth / far " << worst_depth
+                     << "; split without stopping " << worst_split << "; floor 0.5 " << worst_early);
+  BOOST_TEST(terminated > 0u);  // some ray must stop for this case to test anything
+  BOOST_TEST(worst_rgb <= tol);
+  BOOST_TEST(worst_other <= tol);
+  BOOST_TEST(worst_depth <= tol);
+  BOOST_TEST(worst_split <= noise);
+  BOOST_TEST(worst_early > tol);
 }
 
 BOOST_AUTO_TEST_CASE(mismatched_checkpoints_are_refused) {

@@ -172,7 +172,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
 
 std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int samples,
                                             const RayGeometry& geo, int rays, bool background,
-                                            int instances, bool hard_blend, bool occupancy) {
+                                            int instances, bool hard_blend, bool packed) {
   const FieldConfig f = scene_field(field, geo);
   if (!background && instances < 1)
     throw Error("a view needs the background or at least one object instance");
@@ -192,7 +192,7 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
                                                                                   : std::vector<int>{1, N - 1}));
   std::vector<Tensor> parts;
   if (background) {
-    v->pack_static = new_select(occupancy, {0});
+    v->pack_static = new_select(packed, {0});
     parts.push_back(static_raw(smp.positions[0], smp.viewdirs[0], f, v->pack_static));
   }
   if (instances > 0) {
@@ -204,7 +204,7 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
     io.ax = geo.ax;
     io.ay = geo.ay;
     Tensor pos = instance_points(smp.positions[0], v->transforms, io);
-    v->pack_objects = new_select(occupancy, std::vector<int>(B, 1));
+    v->pack_objects = new_select(packed, std::vector<int>(B, 1));
     parts.push_back(object_raw(pos, v->times, f, v->pack_objects));
   }
   Tensor raw = parts.size() == 1 ? parts[0] : stack(parts);

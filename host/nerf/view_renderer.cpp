@@ -101,12 +101,37 @@ ViewRenderer::~ViewRenderer() = default;
 
 void ViewRenderer::set_skip_empty_space(bool on) { grids_ = on ? saved_grids_ : nullptr; }
 
-ViewRenderer::Cached& ViewRenderer::graph_for(bool background, int instances, int rays, bool hard_blend) {
-  auto& slot = graphs_[{background, instances, rays, hard_blend}];
+void ViewRenderer::set_early_termination(const EarlyTermination& t) {
+  int last = 0;
+  for (int c : t.checks) {
+    if (c <= last || c >= config_.samples)
+      throw Error("early termination: checks must rise strictly inside (0, " + std::to_string(config_.samples) +
+                  "), got " + std::to_string(c) + " after " + std::to_string(last));
+    last = c;
+  }
+  if (!(t.below >= 0.0f && t.below <= 1.0f))
+    throw Error("early termination: the transmittance floor must lie in [0, 1], got " + std::to_string(t.below));
+  termination_ = t;
+}
+
+std::vector<size_t> ViewRenderer::segments() const {
+  const size_t S = static_cast<size_t>(config_.samples);
+  std::vector<size_t> b{0};
+  if (termination_.on) {
+    if (termination_.checks.empty() && S >= 2) b.push_back(S / 2);
+    for (int c : termination_.checks) b.push_back(static_cast<size_t>(c));
+  }
+  b.push_back(S);
+  return b;
+}
+
+ViewRenderer::Cached& ViewRenderer::graph_for(bool background, int instances, int rays, bool hard_blend,
+                                              bool packed) {
+  auto& slot = graphs_[{background, instances, rays, hard_blend, packed}];
   if (!slot) {
     slot = std::make_unique<Cached>();
     slot->graph = build_view_graph(config_.field, config_.samples, geometry_, rays, background,
-                                   instances, hard_blend, saved_grids_ != nullptr);
+                                   instances, hard_blend, packed);
     slot->exec = std::make_unique<Executor>(rt_, slot->graph->graph);
     slot->loaded_objects.assign(static_cast<size_t>(instances), 0);
     for (Tensor p : slot->graph->graph.parameters())
@@ -132,7 +157,9 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
   const int pixels_in_view = req.camera.width * req.camera.height;
   if (pixels_in_view <= 0) throw Error("the camera has no pixels (" + std::to_string(req.camera.width) + "x" +
                                        std::to_string(req.camera.height) + ")");
-  Cached& c = graph_for(req.background, B, std::min(chunk_rays_, pixels_in_view), req.hard_blend);
+  // Terminating needs packed samples even without grids; otherwise the plain graph serves.
+  const bool packed = saved_grids_ != nullptr || termination_.on;
+  Cached& c = graph_for(req.background, B, std::min(chunk_rays_, pixels_in_view), req.hard_blend, packed);
   ViewGraph& vg = *c.graph;
   // Object weights for each instance slot: slice `object` of the trained [K, ...] arrays.
   std::vector<int> wanted;
@@ -178,6 +205,10 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
   img.depth.resize(P);
   img.acc.resize(P);
   img.masks.assign(static_cast<size_t>(N), std::vector<float>(P));
+  stats_ = RenderStats{};
+  stats_.rays = P;
+  stats_.samples = P * S * static_cast<size_t>(N);
+  const std::vector<size_t> bounds = segments();
   std::vector<float> pixels(R * 2);
   for (size_t first = 0; first < P; first += R) {
     const size_t n = std::min(R, P - first);
@@ -187,14 +218,47 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
       pixels[r * 2 + 1] = static_cast<float>(p / static_cast<size_t>(W));
     }
     c.exec->set(vg.pixels, pixels);
-    c.exec->forward();
-    const std::vector<float> rgb = c.exec->get(vg.out.rgb), depth = c.exec->get(vg.out.depth),
-                             acc = c.exec->get(vg.out.acc), mask = c.exec->get(vg.out.mask);
-    std::copy_n(rgb.begin(), n * 3, img.rgb.begin() + static_cast<long>(first * 3));
-    std::copy_n(depth.begin(), n, img.depth.begin() + static_cast<long>(first));
-    std::copy_n(acc.begin(), n, img.acc.begin() + static_cast<long>(first));
-    for (int k = 0; k < N; ++k)
-      std::copy_n(mask.begin() + static_cast<long>(k * R), n, img.masks[static_cast<size_t>(k)].begin() + static_cast<long>(first));
+    // Transmittance left before each segment. A padded ray is closed from the start: a packed
+    // graph then evaluates none of its samples, whether or not rays terminate.
+    std::vector<float> T(R, 0.0f);
+    std::fill_n(T.begin(), n, 1.0f);
+    std::vector<uint8_t> open(R, 0);
+    for (size_t k = 0; k + 1 < bounds.size(); ++k) {
+      size_t live = 0;
+      for (size_t r = 0; r < n; ++r) {
+        const bool now = T[r] >= termination_.below;
+        if (k > 0 && open[r] && !now) ++stats_.terminated;
+        open[r] = now;
+        live += now;
+      }
+      if (live == 0) break;
+      for (auto& pack : {vg.pack_static, vg.pack_objects})
+        if (pack) {
+          pack->samples_per_ray = S;
+          pack->first_sample = bounds[k];
+          pack->end_sample = bounds[k + 1];
+          pack->open_rays = open;
+        }
+      c.exec->forward();
+      ++stats_.passes;
+      for (auto& pack : {vg.pack_static, vg.pack_objects})
+        if (pack) stats_.evaluated += pack->kept;
+      if (!vg.pack_static && !vg.pack_objects) stats_.evaluated += R * S * static_cast<size_t>(N);
+      const std::vector<float> rgb = c.exec->get(vg.out.rgb), depth = c.exec->get(vg.out.depth),
+                               acc = c.exec->get(vg.out.acc), mask = c.exec->get(vg.out.mask);
+      // C = C_1 + T_1 C_2: each segment's composite scaled by what the earlier ones left.
+      for (size_t r = 0; r < n; ++r) {
+        if (!open[r]) continue;
+        const size_t p = first + r;
+        for (int j = 0; j < 3; ++j) img.rgb[p * 3 + j] += T[r] * rgb[r * 3 + j];
+        img.depth[p] += T[r] * depth[r];
+        img.acc[p] += T[r] * acc[r];
+        for (size_t m = 0; m < static_cast<size_t>(N); ++m) img.masks[m][p] += T[r] * mask[m * R + r];
+        // acc = 1 - (transmittance after the segment) up to float rounding and the 1e-10
+        // per sample of render.cl's product; clamped, as rounding may push acc past 1.
+        T[r] *= std::max(0.0f, 1.0f - acc[r]);
+      }
+    }
   }
   return img;
 }

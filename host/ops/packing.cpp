@@ -23,22 +23,25 @@ class PackOp final : public Op {
     std::vector<std::vector<float>> kept(batches_);
     size_t longest = 0;
     const bool test = s.enabled && s.grids;
+    const Range range = sample_range(s);
     std::vector<float> pos;
     if (test) pos = ctx.rt.download_floats(ctx.in(0), ctx.in_shape(0).numel());
     const size_t pos_batches = ctx.in_shape(0).rank() == 3 ? batches_ : 1;
     for (size_t b = 0; b < batches_; ++b) {
-      auto& k = kept[b];
-      if (!test) {
-        k.resize(rows_);
-        for (size_t m = 0; m < rows_; ++m) k[m] = static_cast<float>(m);
-      } else {
+      const OccupancyGrid* g = nullptr;
+      if (test) {
         if (b >= s.grid_of_batch.size() || s.grid_of_batch[b] < 0 ||
             static_cast<size_t>(s.grid_of_batch[b]) >= s.grids->size())
           throw Error("pack_occupied: no occupancy grid for batch " + std::to_string(b), kExitInternal);
-        const OccupancyGrid& g = (*s.grids)[static_cast<size_t>(s.grid_of_batch[b])];
-        const float* p = pos.data() + (pos_batches > 1 ? b * rows_ * 3 : 0);
-        for (size_t m = 0; m < rows_; ++m)
-          if (g.occupied[g.cell_of(p + m * 3)]) k.push_back(static_cast<float>(m));
+        g = &(*s.grids)[static_cast<size_t>(s.grid_of_batch[b])];
+      }
+      const float* p = test ? pos.data() + (pos_batches > 1 ? b * rows_ * 3 : 0) : nullptr;
+      auto& k = kept[b];
+      // Rays in order, and in each the samples of the range: the kept rows stay ascending.
+      for (size_t r = 0; r < range.rays; ++r) {
+        if (!range.open.empty() && !range.open[r]) continue;
+        for (size_t m = r * range.per_ray + range.first; m < r * range.per_ray + range.end; ++m)
+          if (!g || g->occupied[g->cell_of(p + m * 3)]) k.push_back(static_cast<float>(m));
       }
       longest = std::max(longest, k.size());
     }
@@ -55,6 +58,25 @@ class PackOp final : public Op {
   std::vector<TensorId> saved_for_backward() const override { return {}; }
 
  private:
+  // The rows as rays of `per_ray` samples, of which [first, end) of the open rays are kept;
+  // without a sample range, one "ray" holding every row.
+  struct Range {
+    size_t rays = 1, per_ray = 0, first = 0, end = 0;
+    const std::vector<uint8_t>& open;
+  };
+  Range sample_range(const PackSelect& s) const {
+    static const std::vector<uint8_t> all;
+    if (s.samples_per_ray == 0) return {1, rows_, 0, rows_, all};
+    const size_t S = s.samples_per_ray;
+    if (rows_ % S != 0 || s.first_sample > s.end_sample || s.end_sample > S)
+      throw Error("pack_occupied: samples [" + std::to_string(s.first_sample) + ", " + std::to_string(s.end_sample) +
+                  ") of " + std::to_string(S) + " per ray do not fit " + std::to_string(rows_) + " rows", kExitInternal);
+    if (!s.open_rays.empty() && s.open_rays.size() != rows_ / S)
+      throw Error("pack_occupied: " + std::to_string(s.open_rays.size()) + " open-ray flags for " +
+                  std::to_string(rows_ / S) + " rays", kExitInternal);
+    return {rows_ / S, S, s.first_sample, s.end_sample, s.open_rays};
+  }
+
   std::shared_ptr<PackSelect> select_;
   int extent_;
   size_t batches_, rows_, multiple_;

@@ -63,15 +63,16 @@ struct ViewGraph {
   bool background = true;
   Tensor pixels, cameras, transforms, times;  // cameras: [N, 16], the view's camera N times
   RenderOutputs out;
-  // With `occupancy`: the packing of the static samples and of the instances' samples (set
-  // grid_of_batch to each instance's object grid).
+  // With `packed`: the packing of the static samples and of the instances' samples (set
+  // grid_of_batch to each instance's object grid), against occupancy grids and the sample
+  // range of an early-termination pass.
   std::shared_ptr<PackSelect> pack_static, pack_objects;
 };
 // Inference: `rays` rays of one camera, the static NeRF when `background`, and `instances`
 // object-NeRF copies each placed by a world-to-object transform at its own time.
 std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& f, int samples, const RayGeometry& g,
                                             int rays, bool background, int instances,
-                                            bool hard_blend, bool occupancy = false);
+                                            bool hard_blend, bool packed = false);
 
 // Density probes for the occupancy grids: the static field at `points` positions and, with
 // objects > 0, every object field at `points` positions and times; the same parameter names

@@ -49,11 +49,19 @@ struct OccupancyGrid {
 
 // What a pack op tests its samples against: one grid per NeRF and, per batch of the packed
 // positions, which grid. The owner may change both between runs (a renderer placing other
-// objects); `enabled` false keeps every sample.
+// objects); `enabled` false (or no grids) keeps every sample the grids would drop.
+//
+// On top of the grids, a pass of early ray termination (view_renderer.cpp) keeps only a
+// range of sample indices of the rays still open: with `samples_per_ray` S > 0 the rows of
+// every batch are ray-major (row m is sample m % S of ray m / S) and a row survives only if
+// first_sample <= m % S < end_sample and open_rays[m / S] != 0 (an empty open_rays: every
+// ray is open). S = 0 applies no such rule.
 struct PackSelect {
   std::shared_ptr<const std::vector<OccupancyGrid>> grids;
   std::vector<int> grid_of_batch;
   bool enabled = true;
+  size_t samples_per_ray = 0, first_sample = 0, end_sample = 0;
+  std::vector<uint8_t> open_rays;
   // Written by the pack op on every run: samples kept over all batches, and samples tested.
   size_t kept = 0, tested = 0;
 };

@@ -1,7 +1,8 @@
 #pragma once
 // Inference: renders any camera of a trained run at any time, and compositions of object
 // instances (which object NeRF, where, at which time) over the static scene, with hard
-// blending. Rays run in chunks through cached view graphs (one per NeRF layout).
+// blending. Rays run in chunks through cached view graphs (one per NeRF layout), skipping
+// empty space (occupancy grids) and stopping early (EarlyTermination).
 #include <array>
 #include <map>
 #include <memory>
@@ -52,6 +53,29 @@ struct ViewImage {
   std::vector<std::vector<float>> masks;  // per NeRF drawn (background first), H*W each
 };
 
+// Early ray termination: volume rendering with one shared transmittance splits along depth,
+// C = C_1 + T_1 C_2 (C_1 the composite of samples [0, s), C_2 that of [s, S) with the
+// transmittance restarted at 1, T_1 what is left after s; the same for depth, acc and the
+// masks). A render runs one pass per segment between the `checks` and adds a segment only
+// for rays whose transmittance is still >= `below`, so a stopped ray loses at most `below`
+// of every colour channel, acc and mask (and `below` times the far depth of its depth).
+struct EarlyTermination {
+  bool on = true;
+  float below = 1e-4f;
+  // Sample indices (ascending, in (0, S)) where the transmittance is checked; empty: S / 2.
+  std::vector<int> checks;
+};
+
+// What the last render did (its pixels; a graph without packing also evaluates the padded
+// rays of a last chunk, and `evaluated` counts those).
+struct RenderStats {
+  size_t rays = 0;
+  size_t terminated = 0;  // rays that stopped before their last segment
+  size_t passes = 0;      // graph runs
+  // Field evaluations (a sample of one NeRF), and those a render without any skip would run.
+  size_t evaluated = 0, samples = 0;
+};
+
 class ViewRenderer {
  public:
   // `chunk_rays` 0: chosen from the network width (about 2^24 activations per layer).
@@ -66,10 +90,17 @@ class ViewRenderer {
   bool skips_empty_space() const { return grids_ != nullptr; }
   // Renders every sample even when the run has occupancy grids (the reference for tests).
   void set_skip_empty_space(bool on);
+  // On by default; off renders every sample of every ray (the reference for tests).
+  void set_early_termination(bool on) { termination_.on = on; }
+  void set_early_termination(const EarlyTermination& t);
+  const EarlyTermination& early_termination() const { return termination_; }
+  const RenderStats& last_stats() const { return stats_; }
 
  private:
   struct Cached;
-  Cached& graph_for(bool background, int instances, int rays, bool hard_blend);
+  Cached& graph_for(bool background, int instances, int rays, bool hard_blend, bool packed);
+  // Segment bounds [0, checks..., S] of the passes (just [0, S] when termination is off).
+  std::vector<size_t> segments() const;
 
   Runtime& rt_;
   TrainConfig config_;
@@ -78,7 +109,9 @@ class ViewRenderer {
   bool has_objects_ = false;
   int chunk_rays_ = 0;
   std::shared_ptr<std::vector<OccupancyGrid>> grids_, saved_grids_;
-  std::map<std::tuple<bool, int, int, bool>, std::unique_ptr<Cached>> graphs_;
+  EarlyTermination termination_;
+  RenderStats stats_;
+  std::map<std::tuple<bool, int, int, bool, bool>, std::unique_ptr<Cached>> graphs_;
 };
 
 }  // namespace nova
