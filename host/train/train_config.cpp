@@ -161,6 +161,8 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.weights.alpha; }));
   o.push_back(float_option("w-sparsity", "weight of the L1 on object alpha inside its mask (one compact surface per ray; not in the reference)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.weights.sparsity; }));
+  o.push_back(float_option("w-distortion", "weight of the distortion loss: each object NeRF's weight spread along the rays of its mask (streaks; joint training)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.w_distortion; }));
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(bool_option("occupancy", "skip empty space: occupancy grids from the density, samples in empty cells never reach an MLP",

@@ -38,6 +38,17 @@ Tensor depth_loss(Tensor depth, Tensor target, Tensor valid);
 // along that camera's rays, which shows as streaks from any other camera.
 Tensor sparsity_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {});
 
+// Distortion loss (mip-NeRF 360), each NeRF with its own transmittance: the mean over NeRFs n
+// and rays r of mask_n(r) sum_{i,j} w_i w_j |u_i - u_j|, w = T alpha its sample weights and u
+// the sample depths z scaled to [0, 1] along the ray (kernels/distortion.cl). 0 for one
+// opaque sample, larger the more the weight is spread: it removes low-density haze and the
+// streaks an object seen from one camera per time leaves along that camera's rays. raw
+// [N, R*S, C] or [R*S, C], delta as render_composite, z [R, S], masks [N, R] (or Tensor{}:
+// every ray), noise [N, R*S] (or Tensor{}). NeRFs below `first_nerf` take no part (the mean
+// is over the others).
+Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Tensor noise = {},
+                       size_t first_nerf = 0);
+
 // The reference code's weights (DESIGN.md, "Loss weights").
 struct NovelViewLossWeights {
   float full_rgb = 3.0f;  // mse(composite rgb, target rgb)

@@ -35,6 +35,9 @@ struct TrainConfig {
   // Depth up to scale and shift against the scene's disparity maps (disp/), in both phases,
   // as DynamicNeRF (whose code NOVA builds on) does; off without disparity or with 0.
   float w_depth = 0.04f;
+  // Distortion loss (losses.hpp) of each object NeRF on its mask's rays in joint training: a
+  // prior for one surface per ray against streaks (not in the reference: 0 there).
+  float w_distortion = 0.0f;
   // Empty-space skipping (occupancy.hpp): one grid per NeRF, updated from the density every
   // occupancy_every steps once occupancy_warmup steps of a phase have passed; samples in
   // empty cells never reach an MLP.
