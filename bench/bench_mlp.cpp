@@ -2,16 +2,20 @@
 // -> 4) at large batches: forward and forward + backward samples/s and GFLOP/s on the OpenCL
 // device, the per-op time table, and the same GEMM shapes through the host BLAS in the same
 // run, with the ratio. The host-BLAS column is built only with OpenBLAS (NOVA_HOST_BLAS, see
-// CMakeLists.txt): a GPU machine without packages measures the device alone.
+// CMakeLists.txt): a GPU machine without packages measures the device alone. Fused dense
+// layers (the default) are timed against the same network of linear + bias_act ops, and one
+// hidden layer of each width in --fused-widths alone (dense_fusion.cpp), as ratios.
 #ifdef NOVA_HOST_BLAS
 #include <cblas.h>
 #endif
 
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "bench.hpp"
+#include "dense_fusion.hpp"
 #include "nova/executor.hpp"
 #include "nova/gemm.hpp"
 #include "nova/mlp.hpp"
@@ -134,7 +138,7 @@ std::vector<double> device_layer_seconds(Runtime& rt, size_t m, size_t w, int re
 int mlp(const Args& args) {
   const Options o(args, {{"batches", "16384,65536"}, {"repeats", "3"}, {"device", ""},
                          {"width", "256"}, {"depth", "8"},
-                         {"gemm", "tuned"}, {"layer", "256"}});
+                         {"gemm", "tuned"}, {"layer", "256"}, {"fused-widths", "64,256"}});
   if (o.help()) {
     std::cout << o.usage("nova-bench mlp");
     return 0;
@@ -171,11 +175,12 @@ int mlp(const Args& args) {
     }
   }
   std::ostringstream csv;
-  csv << "gemm,batch,pass,device_samples_per_s,device_gflops,host_blas_samples_per_s,"
-         "host_blas_gflops,device_over_host\n";
+  csv << "gemm,batch,pass,device_samples_per_s,device_gflops,two_ops_samples_per_s,"
+         "fused_over_two_ops,host_blas_samples_per_s,host_blas_gflops,device_over_host\n";
   std::cout << std::left << std::setw(8) << "batch" << std::setw(18) << "pass" << std::right
-            << std::setw(14) << "samples/s" << std::setw(10) << "GFLOP/s" << std::setw(16)
-            << "host BLAS s/s" << std::setw(10) << "GFLOP/s" << std::setw(10) << "ratio" << "\n";
+            << std::setw(14) << "samples/s" << std::setw(10) << "GFLOP/s" << std::setw(14)
+            << "2-op s/s" << std::setw(12) << "fused/2-op" << std::setw(16) << "host BLAS s/s"
+            << std::setw(10) << "GFLOP/s" << std::setw(10) << "ratio" << "\n";
   std::string profile;
   for (GemmProvider provider : providers) {
     set_gemm_provider(rt, provider);
@@ -183,24 +188,39 @@ int mlp(const Args& args) {
     for (long batch_l : o.integers("batches")) {
       const size_t m = static_cast<size_t>(batch_l);
       for (bool backward : {false, true}) {
-        Graph g;
-        Tensor x = g.input("x", Shape{m, in});
-        Tensor target = g.input("target", Shape{m, 4});
-        Tensor y = build_mlp(x, c).output;
-        if (backward)
-          g.set_loss(mse(y, target));
-        else
-          g.keep(y);
-        ExecutorOptions eo;
-        eo.profile = true;
-        Executor ex(rt, g, eo);
-        ex.set(x, std::vector<float>(m * in, 0.1f));
-        ex.set(target, std::vector<float>(m * 4, 0.5f));
-        const double device_s = time_median(repeats, [&] {
-          ex.forward();
-          if (backward) ex.backward();
+        // The network with fused dense layers (ex) and with linear + bias_act (two).
+        struct Network {
+          Graph g;
+          std::unique_ptr<Executor> ex;
+        };
+        const auto build = [&](bool fused) {
+          auto n = std::make_unique<Network>();
+          Tensor x = n->g.input("x", Shape{m, in});
+          Tensor target = n->g.input("target", Shape{m, 4});
+          MlpConfig cc = c;
+          cc.fused_layers = fused;
+          Tensor y = build_mlp(x, cc).output;
+          if (backward)
+            n->g.set_loss(mse(y, target));
+          else
+            n->g.keep(y);
+          ExecutorOptions eo;
+          eo.profile = true;
+          n->ex = std::make_unique<Executor>(rt, n->g, eo);
+          n->ex->set(x, std::vector<float>(m * in, 0.1f));
+          n->ex->set(target, std::vector<float>(m * 4, 0.5f));
+          return n;
+        };
+        const auto fused_net = build(true), two_net = build(false);
+        Executor& ex = *fused_net->ex;
+        const auto run = [&](Executor& e) {
+          e.forward();
+          if (backward) e.backward();
           rt.finish();
-        });
+        };
+        const FusedTimes times =
+            time_alternating(repeats, [&] { run(ex); }, [&] { run(*two_net->ex); });
+        const double device_s = times.fused;
         if (backward && !profile.size()) {
           ex.reset_timings();
           ex.forward();
@@ -215,8 +235,11 @@ int mlp(const Args& args) {
         const double dev_rate = m / device_s;
         std::cout << std::left << std::setw(8) << m << std::setw(18) << pass << std::right
                   << std::fixed << std::setprecision(0) << std::setw(14) << dev_rate
-                  << std::setprecision(1) << std::setw(10) << flops / device_s * 1e-9;
-        csv << gemm_provider_name(provider) << "," << m << "," << pass << "," << dev_rate << "," << flops / device_s * 1e-9 << ",";
+                  << std::setprecision(1) << std::setw(10) << flops / device_s * 1e-9
+                  << std::setprecision(0) << std::setw(14) << m / times.two_ops
+                  << std::setprecision(3) << std::setw(12) << times.ratio();
+        csv << gemm_provider_name(provider) << "," << m << "," << pass << "," << dev_rate << ","
+            << flops / device_s * 1e-9 << "," << m / times.two_ops << "," << times.ratio() << ",";
         if (host_s > 0) {
           const double host_rate = m / host_s;
           std::cout << std::setprecision(0) << std::setw(16) << host_rate << std::setprecision(1)
@@ -271,9 +294,34 @@ int mlp(const Args& args) {
                 << configs[2] << std::endl;
     }
   }
+  // One hidden ReLU layer per width, fused (dense) against linear + bias_act, alternately.
+  std::ostringstream fused_csv;
+  fused_csv << "gemm,batch,width,forward_config,fwd_fused_ms,fwd_two_ops_ms,fwd_two_over_fused,"
+               "step_fused_ms,step_two_ops_ms,step_two_over_fused\n";
+  std::cout << "\none w -> w ReLU layer, fused (dense) against two ops (linear + bias_act), ms; "
+               "ratio = two ops / fused (> 1: fusion wins):\n";
+  for (GemmProvider provider : providers) {
+    set_gemm_provider(rt, provider);
+    for (long batch_l : o.integers("batches"))
+      for (long w_l : o.integers("fused-widths")) {
+        const size_t m = static_cast<size_t>(batch_l), w = static_cast<size_t>(w_l);
+        const DenseLayerTimes t = time_dense_layer(rt, m, w, repeats);
+        std::cout << std::fixed << "  " << std::left << std::setw(8)
+                  << gemm_provider_name(provider) << std::setw(7) << m << std::setw(5) << w
+                  << std::right << std::setprecision(3) << " forward " << t.forward.fused * 1e3
+                  << " / " << t.forward.two_ops * 1e3 << " ratio " << t.forward.ratio()
+                  << " | fwd+bwd " << t.step.fused * 1e3 << " / " << t.step.two_ops * 1e3
+                  << " ratio " << t.step.ratio() << "  [" << t.config << "]" << std::endl;
+        fused_csv << gemm_provider_name(provider) << "," << m << "," << w << "," << t.config
+                  << "," << t.forward.fused * 1e3 << "," << t.forward.two_ops * 1e3 << ","
+                  << t.forward.ratio() << "," << t.step.fused * 1e3 << ","
+                  << t.step.two_ops * 1e3 << "," << t.step.ratio() << "\n";
+      }
+  }
   std::cout << "\n(device = the whole graph: GEMMs, bias + activation, concat, loss; host BLAS "
-               "= the GEMMs alone)\n\n"
-            << profile << "\nCSV\n" << csv.str() << "\nCSV (layer GEMMs)\n" << layer_csv.str();
+               "= the GEMMs alone; 2-op = the same network of linear + bias_act ops)\n\n"
+            << profile << "\nCSV\n" << csv.str() << "\nCSV (layer GEMMs)\n" << layer_csv.str()
+            << "\nCSV (fused dense layer)\n" << fused_csv.str();
   return 0;
 }
 

@@ -14,6 +14,26 @@
 #define GEMM_MB 8
 #endif
 
+// The epilogue of a dense layer's forward, y = act(v + bias[column]), where v is the finished
+// alpha op(A) op(B) + beta C (never a partial sum of a split reduction). GEMM_BIAS_ACT (a build
+// option) turns it on and names the activation as activation.cl's ACT does: 0 identity,
+// 1 ReLU, 2 sigmoid, 3 softplus. The expressions are activation.cl's act_forward, repeated
+// here because a family is one source (test_dense checks that the fused and the two-pass
+// results agree). The bias is added in a statement of its own so that the compiler cannot
+// contract it with alpha * acc into one fma: the rounding stays that of the two-pass path.
+// GEMM_ACT works on float and floatn alike.
+#ifdef GEMM_BIAS_ACT
+#if GEMM_BIAS_ACT == 1
+#define GEMM_ACT(x) fmax(x, 0.0f)
+#elif GEMM_BIAS_ACT == 2
+#define GEMM_ACT(x) (1.0f / (1.0f + exp(-(x))))
+#elif GEMM_BIAS_ACT == 3
+#define GEMM_ACT(x) (fmax(x, 0.0f) + log1p(exp(-fabs(x))))
+#else
+#define GEMM_ACT(x) (x)
+#endif
+#endif
+
 inline void gemm_store(__global float* C, uint ldc, uint n, uint rows, const float* acc,
                        float alpha, float beta) {
   for (uint i = 0; i < rows; ++i) {
@@ -64,7 +84,8 @@ __kernel void gemm_transpose(__global const float* B, __global float* T, uint ro
 #endif
 __kernel void gemm_nn(__global const float* A, __global const float* B, __global float* C,
                       uint M, uint N, uint K, uint lda, uint ldb, uint ldc, uint stride_a,
-                      uint stride_b, uint stride_c, uint batch, float alpha, float beta) {
+                      uint stride_b, uint stride_c, uint batch, float alpha, float beta,
+                      __global const float* bias, uint stride_bias) {
   const uint m = get_global_id(0), job = get_global_id(1);
   const uint blocks = (N + GEMM_NB - 1) / GEMM_NB;
   if (m >= M || job >= blocks * batch) return;
@@ -86,7 +107,14 @@ __kernel void gemm_nn(__global const float* A, __global const float* B, __global
     }
   }
   __global float* c = C + (size_t)b * stride_c + (size_t)m * ldc + n0;
-  for (uint j = 0; j < cols; ++j) c[j] = beta == 0.0f ? alpha * acc[j] : alpha * acc[j] + beta * c[j];
+  for (uint j = 0; j < cols; ++j) {
+    float v = beta == 0.0f ? alpha * acc[j] : alpha * acc[j] + beta * c[j];
+#ifdef GEMM_BIAS_ACT
+    v += bias[(size_t)b * stride_bias + n0 + j];
+    v = GEMM_ACT(v);
+#endif
+    c[j] = v;
+  }
 }
 
 // gemm_blk: register-blocked GEMM with explicit float8 vectors (PoCL leaves explicit vector
@@ -112,7 +140,8 @@ __kernel void gemm_nn(__global const float* A, __global const float* B, __global
 __kernel void gemm_blk(__global const float* A, __global const float* B, __global float* C,
                        __global float* P, uint poff, uint M, uint N, uint K, uint a_rs, uint a_cs, uint ldb,
                        uint ldc, uint stride_a, uint stride_b, uint stride_c, uint batch,
-                       uint kc, uint splits, float alpha, float beta) {
+                       uint kc, uint splits, float alpha, float beta,
+                       __global const float* bias, uint stride_bias) {
   const uint nb = get_global_id(0), job = get_global_id(1);
   const uint nblocks = (N + GEMM_BN - 1) / GEMM_BN, mblocks = (M + GEMM_RM - 1) / GEMM_RM;
   if (nb >= nblocks || job >= mblocks * batch * splits) return;
@@ -134,6 +163,11 @@ __kernel void gemm_blk(__global const float* A, __global const float* B, __globa
     c = C + (size_t)b * stride_c + (size_t)m0 * ldc + n0;
   }
   const uint rows = min((uint)GEMM_RM, M - m0), cols = min((uint)GEMM_BN, N - n0);
+#ifdef GEMM_BIAS_ACT
+  // With a split the epilogue waits for gemm_reduce's sum.
+  const bool epilogue = splits == 1;
+  __global const float* bv_row = bias + (size_t)b * stride_bias + n0;
+#endif
   if (rows == GEMM_RM && cols == GEMM_BN) {
     float8 acc[GEMM_RM][GEMM_VN];
 #pragma unroll
@@ -159,7 +193,14 @@ __kernel void gemm_blk(__global const float* A, __global const float* B, __globa
       for (uint j = 0; j < GEMM_VN; ++j) {
         __global float* o = c + (size_t)i * ldo;
         const float8 r = cscale * acc[i][j];
-        vstore8(cbeta == 0.0f ? r : r + cbeta * vload8(j, o), j, o);
+        float8 v = cbeta == 0.0f ? r : r + cbeta * vload8(j, o);
+#ifdef GEMM_BIAS_ACT
+        if (epilogue) {
+          v += vload8(j, bv_row);
+          v = GEMM_ACT(v);
+        }
+#endif
+        vstore8(v, j, o);
       }
   } else {  // a ragged edge block: scalar, one column at a time
     for (uint j = 0; j < cols; ++j) {
@@ -175,16 +216,24 @@ __kernel void gemm_blk(__global const float* A, __global const float* B, __globa
       }
       for (uint i = 0; i < rows; ++i) {
         __global float* o = c + (size_t)i * ldo + j;
-        *o = cbeta == 0.0f ? cscale * acc[i] : cscale * acc[i] + cbeta * *o;
+        float v = cbeta == 0.0f ? cscale * acc[i] : cscale * acc[i] + cbeta * *o;
+#ifdef GEMM_BIAS_ACT
+        if (epilogue) {
+          v += bv_row[j];
+          v = GEMM_ACT(v);
+        }
+#endif
+        *o = v;
       }
     }
   }
 }
 
-// C[b] = alpha sum_s P[s][b] + beta C[b], the chunks added in order s = 0, 1, ...
+// C[b] = alpha sum_s P[s][b] + beta C[b], the chunks added in order s = 0, 1, ..., then the
+// epilogue (with GEMM_BIAS_ACT) on the finished sum.
 __kernel void gemm_reduce(__global const float* P, uint poff, __global float* C, uint M, uint N,
                           uint ldc, uint stride_c, uint batch, uint splits, float alpha,
-                          float beta) {
+                          float beta, __global const float* bias, uint stride_bias) {
   const uint n = get_global_id(0), job = get_global_id(1);
   if (n >= N || job >= M * batch) return;
   const uint b = job / M, m = job % M;
@@ -193,5 +242,10 @@ __kernel void gemm_reduce(__global const float* P, uint poff, __global float* C,
   float s = 0.0f;
   for (uint i = 0; i < splits; ++i) s += p[i * plane];
   __global float* c = C + (size_t)b * stride_c + (size_t)m * ldc + n;
-  *c = beta == 0.0f ? alpha * s : alpha * s + beta * *c;
+  float v = beta == 0.0f ? alpha * s : alpha * s + beta * *c;
+#ifdef GEMM_BIAS_ACT
+  v += bias[(size_t)b * stride_bias + n];
+  v = GEMM_ACT(v);
+#endif
+  *c = v;
 }

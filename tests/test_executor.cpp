@@ -95,8 +95,8 @@ BOOST_AUTO_TEST_CASE(profile_table_names_every_op) {
   ex.backward();
   const auto t = ex.timings();
   const std::string table = ex.profile_table();
-  for (const char* op : {"linear", "bias_relu", "concat", "positional_encoding", "mse",
-                         "linear (backward)", "bias_relu (backward)"})
+  for (const char* op : {"dense_relu", "dense_identity", "concat", "positional_encoding", "mse",
+                         "dense_relu (backward)", "dense_identity (backward)"})
     BOOST_TEST(table.find(op) != std::string::npos, op << " missing from\n" << table);
   for (const auto& row : t) BOOST_TEST(row.ms >= 0.0);
 }

@@ -11,7 +11,8 @@ struct Layer {
   Tensor w, b, y;
 };
 
-Layer make_layer(Tensor x, size_t n, Activation act, const std::string& name, size_t networks) {
+Layer make_layer(Tensor x, size_t n, Activation act, const std::string& name, size_t networks,
+                 bool fused = true) {
   Graph& g = *x.graph;
   const size_t k = x.shape().cols();
   const bool batched = networks > 1;
@@ -19,7 +20,7 @@ Layer make_layer(Tensor x, size_t n, Activation act, const std::string& name, si
   Layer l;
   l.w = g.parameter(name + ".w", batched ? Shape{networks, k, n} : Shape{k, n}, Init::uniform(bound));
   l.b = g.parameter(name + ".b", batched ? Shape{networks, n} : Shape{n}, Init::uniform(bound));
-  l.y = dense(x, l.w, l.b, act);
+  l.y = fused ? dense(x, l.w, l.b, act) : bias_act(linear(x, l.w), l.b, act);
   return l;
 }
 
@@ -47,7 +48,7 @@ Mlp build_mlp(Tensor input, const MlpConfig& c, const std::string& name) {
   Mlp mlp;
   Tensor h = input;
   const auto layer = [&](size_t k, size_t n, Activation act, const std::string& lname) {
-    Layer l = make_layer(h, n, act, name + "." + lname, nets);
+    Layer l = make_layer(h, n, act, name + "." + lname, nets, c.fused_layers);
     mlp.weights.push_back(l.w);
     mlp.biases.push_back(l.b);
     mlp.flops_per_row += 2.0 * static_cast<double>(k) * static_cast<double>(n);

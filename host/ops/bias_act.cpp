@@ -1,9 +1,41 @@
 // y = act(h + b): bias and activation fused into one pass over the GEMM output.
-#include "nova/executor.hpp"
-#include "nova/ops.hpp"
-#include "op_util.hpp"
+#include "layer_parts.hpp"
 
 namespace nova {
+namespace {
+
+std::string activation_options(Activation act) {
+  return "-DACT=" + std::to_string(static_cast<int>(act));
+}
+
+}  // namespace
+
+namespace detail {
+
+void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts, cl_mem y,
+                       cl_mem dy, cl_mem dh, bool acc_dh, cl_mem db, bool acc_db,
+                       cl_mem partials) {
+  const std::string options = activation_options(act);
+  if (db) {
+    const size_t bc = s.batch * s.cols;
+    ctx.launch("activation", "bias_grad_partial", options)
+        .arg(y).arg(dy).arg(partials).arg(u32(s.rows, "rows"))
+        .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
+        .run2(bc, parts);
+    ctx.launch("reduce", "colsum_finish")
+        .arg(partials).arg(db).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
+        .arg(static_cast<int>(acc_db))
+        .run(bc);
+  }
+  const size_t n = s.batch * s.rows * s.cols;
+  if (dh && n > 0)
+    ctx.launch("activation", "bias_act_backward", options)
+        .arg(y).arg(dy).arg(dh).arg(u32(n, "bias_act size")).arg(static_cast<int>(acc_dh))
+        .run(n);
+}
+
+}  // namespace detail
+
 namespace {
 
 class BiasActOp final : public Op {
@@ -11,14 +43,13 @@ class BiasActOp final : public Op {
   BiasActOp(detail::Matrix3 s, Activation act) : s_(s), act_(act) {}
   std::string type() const override { return std::string("bias_") + activation_name(act_); }
 
-  std::string options() const { return "-DACT=" + std::to_string(static_cast<int>(act_)); }
-  size_t parts() const { return std::min<size_t>(64, std::max<size_t>(1, s_.rows / 64)); }
+  size_t parts() const { return detail::bias_grad_parts(s_.rows); }
 
   void forward(ExecContext& ctx) override {
     const size_t rows = ctx.in_rows(0, s_.rows);
     const size_t n = s_.batch * rows * s_.cols;
     if (n == 0) return;
-    ctx.launch("activation", "bias_act_forward", options())
+    ctx.launch("activation", "bias_act_forward", activation_options(act_))
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.out(0))
         .arg(detail::u32(n, "bias_act size")).arg(detail::u32(s_.cols, "cols"))
         .arg(detail::u32(rows * s_.cols, "per batch"))
@@ -28,26 +59,10 @@ class BiasActOp final : public Op {
   void backward(ExecContext& ctx) override {
     cl_mem dy = ctx.grad_out(0);
     if (!dy) return;
-    const size_t rows = ctx.in_rows(0, s_.rows);
-    const size_t n = s_.batch * rows * s_.cols;
-    if (n > 0)
-      if (cl_mem dh = ctx.grad_in(0))
-      ctx.launch("activation", "bias_act_backward", options())
-          .arg(ctx.out(0)).arg(dy).arg(dh).arg(detail::u32(n, "bias_act size"))
-          .arg(static_cast<int>(ctx.accumulate_in(0)))
-          .run(n);
-    cl_mem db = ctx.grad_in(1);
-    if (!db) return;
-    const size_t bc = s_.batch * s_.cols;
-    const unsigned parts = detail::u32(this->parts(), "parts");
-    ctx.launch("activation", "bias_grad_partial", options())
-        .arg(ctx.out(0)).arg(dy).arg(ctx.workspace()).arg(detail::u32(rows, "rows"))
-        .arg(detail::u32(s_.cols, "cols")).arg(detail::u32(bc, "batch cols")).arg(parts)
-        .run2(bc, parts);
-    ctx.launch("reduce", "colsum_finish")
-        .arg(ctx.workspace()).arg(db).arg(detail::u32(bc, "batch cols")).arg(parts)
-        .arg(static_cast<int>(ctx.accumulate_in(1)))
-        .run(bc);
+    const detail::Matrix3 live{s_.batch, ctx.in_rows(0, s_.rows), s_.cols};
+    detail::bias_act_backward(ctx, live, act_, parts(), ctx.out(0), dy, ctx.grad_in(0),
+                              ctx.accumulate_in(0), ctx.grad_in(1), ctx.accumulate_in(1),
+                              ctx.workspace());
   }
 
   // The derivative is computed from y; h is not needed.

@@ -50,7 +50,31 @@ void transpose_b(Runtime& rt, const GemmArgs& g, cl_mem t) {
       .run2(g.n, g.k * g.batch);
 }
 
-void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
+// Build options and arguments of the epilogue (GEMM_BIAS_ACT in kernels/gemm.cl). Without
+// one the kernels never read the bias argument; C stands in for it.
+std::string epilogue_options(const GemmEpilogue& e) {
+  if (!e.bias) return "";
+  return " -DGEMM_BIAS_ACT=" + std::to_string(static_cast<int>(e.act));
+}
+Launch& epilogue_args(Launch& l, const GemmArgs& g, const GemmEpilogue& e) {
+  return l.arg(e.bias ? e.bias : g.c).arg(detail::u32(e.stride_bias, "gemm bias stride"));
+}
+
+// The epilogue as a pass of its own over C (a provider that cannot fuse it): activation.cl's
+// bias_act_forward in place, which needs C dense.
+void epilogue_pass(Runtime& rt, const GemmArgs& g, const GemmEpilogue& e) {
+  using detail::u32;
+  if (g.ldc != g.n || (g.batch > 1 && (g.stride_c != g.m * g.n || e.stride_bias != g.n)))
+    throw Error("GEMM epilogue: a separate pass needs C dense and one bias row per batch",
+                kExitInternal);
+  const size_t count = g.batch * g.m * g.n;
+  rt.launch("activation", "bias_act_forward", "-DACT=" + std::to_string(static_cast<int>(e.act)))
+      .arg(g.c).arg(e.bias).arg(g.c).arg(u32(count, "gemm epilogue size"))
+      .arg(u32(g.n, "gemm n")).arg(u32(g.m * g.n, "gemm epilogue per batch"))
+      .run(count);
+}
+
+void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp, const GemmEpilogue& epi) {
   using detail::u32;
   cl_mem b = g.b;
   size_t ldb = g.ldb, stride_b = g.stride_b;
@@ -69,13 +93,14 @@ void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
   // 8 rows (GEMM_NB and GEMM_MB of kernels/gemm.cl).
   const size_t items0 = g.trans_a ? g.n : g.m;
   const size_t blocks = g.trans_a ? (g.m + 7) / 8 : (g.n + 15) / 16;
-  rt.launch("gemm", g.trans_a ? "gemm_tn" : "gemm_nn")
-      .arg(g.a).arg(b).arg(g.c).arg(u32(g.m, "gemm m")).arg(u32(g.n, "gemm n"))
+  Launch l = rt.launch("gemm", g.trans_a ? "gemm_tn" : "gemm_nn", epilogue_options(epi));
+  l.arg(g.a).arg(b).arg(g.c).arg(u32(g.m, "gemm m")).arg(u32(g.n, "gemm n"))
       .arg(u32(g.k, "gemm k")).arg(u32(g.lda, "gemm lda")).arg(u32(ldb, "gemm ldb"))
       .arg(u32(g.ldc, "gemm ldc")).arg(u32(g.stride_a, "gemm stride_a"))
       .arg(u32(stride_b, "gemm stride_b")).arg(u32(g.stride_c, "gemm stride_c"))
-      .arg(u32(g.batch, "gemm batch")).arg(g.alpha).arg(g.beta)
-      .run2(items0, blocks * g.batch);
+      .arg(u32(g.batch, "gemm batch")).arg(g.alpha).arg(g.beta);
+  if (!g.trans_a) epilogue_args(l, g, epi);
+  l.run2(items0, blocks * g.batch);
 }
 
 // ---- the register-blocked kernel (gemm_blk) ------------------------------------------------
@@ -132,7 +157,8 @@ void enqueue2(Runtime& rt, cl_kernel kernel, size_t n0, size_t n1, size_t max0) 
            "clEnqueueNDRangeKernel(gemm_blk)");
 }
 
-void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
+void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp,
+                  const GemmEpilogue& epi) {
   using detail::u32;
   const Blocked p = blocked_params(cfg);
   if (g.trans_a && g.trans_b) throw Error("blocked GEMM: A^T B^T is not supported");
@@ -150,8 +176,8 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
     ldb = g.n;
     stride_b = g.k * g.n;
   }
-  const std::string options =
-      "-DGEMM_RM=" + std::to_string(p.rm) + " -DGEMM_VN=" + std::to_string(p.vn);
+  const std::string options = "-DGEMM_RM=" + std::to_string(p.rm) +
+                              " -DGEMM_VN=" + std::to_string(p.vn) + epilogue_options(epi);
   cl_mem a = g.a;
   size_t a_rs = g.trans_a ? 1 : g.lda, a_cs = g.trans_a ? g.lda : 1, stride_a = g.stride_a;
   size_t poff = own_temp_floats(g);
@@ -171,23 +197,25 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
   }
   cl_kernel kernel = rt.kernel("gemm", "gemm_blk", options);
   const size_t kc = splits > 1 ? p.kc : std::max<size_t>(g.k, 1);
-  Launch(rt, kernel)
-      .arg(a).arg(b).arg(g.c).arg(splits > 1 ? temp : g.c).arg(u32(poff, "gemm partials"))
+  Launch blk(rt, kernel);
+  blk.arg(a).arg(b).arg(g.c).arg(splits > 1 ? temp : g.c).arg(u32(poff, "gemm partials"))
       .arg(u32(g.m, "gemm m")).arg(u32(g.n, "gemm n")).arg(u32(g.k, "gemm k"))
       .arg(u32(a_rs, "gemm lda")).arg(u32(a_cs, "gemm lda"))
       .arg(u32(ldb, "gemm ldb")).arg(u32(g.ldc, "gemm ldc"))
       .arg(u32(stride_a, "gemm stride_a")).arg(u32(stride_b, "gemm stride_b"))
       .arg(u32(g.stride_c, "gemm stride_c")).arg(u32(g.batch, "gemm batch"))
       .arg(u32(kc, "gemm kc")).arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta);
+  epilogue_args(blk, g, epi);
   const size_t bn = 8 * p.vn;
   enqueue2(rt, kernel, (g.n + bn - 1) / bn, (g.m + p.rm - 1) / p.rm * g.batch * splits, 16);
-  if (splits > 1)
-    rt.launch("gemm", "gemm_reduce", options)
-        .arg(temp).arg(u32(poff, "gemm partials")).arg(g.c).arg(u32(g.m, "gemm m"))
+  if (splits > 1) {
+    Launch reduce = rt.launch("gemm", "gemm_reduce", options);
+    reduce.arg(temp).arg(u32(poff, "gemm partials")).arg(g.c).arg(u32(g.m, "gemm m"))
         .arg(u32(g.n, "gemm n")).arg(u32(g.ldc, "gemm ldc"))
         .arg(u32(g.stride_c, "gemm stride_c")).arg(u32(g.batch, "gemm batch"))
-        .arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta)
-        .run2(g.n, g.m * g.batch);
+        .arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta);
+    epilogue_args(reduce, g, epi).run2(g.n, g.m * g.batch);
+  }
 }
 
 // ---- CLBlast --------------------------------------------------------------------------------
@@ -306,14 +334,26 @@ GemmConfig GemmConfig::parse(const std::string& text) {
   return c;
 }
 
-void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
+bool gemm_fuses_epilogue(const GemmConfig& cfg, const GemmArgs& g) {
+  return cfg.provider == "blocked" || (cfg.provider == "kernels" && !g.trans_a);
+}
+
+GemmConfig gemm_choice(Runtime& rt, const GemmArgs& g) {
+  configure_gemm(rt);
+  return choose(rt, g);
+}
+
+void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp,
+               const GemmEpilogue& epi) {
   if (g.m == 0 || g.n == 0 || g.batch == 0) return;
   configure_gemm(rt);
+  if (epi.bias && !gemm_fuses_epilogue(cfg, g))
+    throw Error("GEMM configuration '" + cfg.str() + "' cannot fuse a bias + activation");
   if (cfg.provider == "kernels") {
     if (!own_kernels_fit(g)) throw Error("own GEMM kernels: A^T B^T is not supported");
-    return own_gemm(rt, g, temp);
+    return own_gemm(rt, g, temp, epi);
   }
-  if (cfg.provider == "blocked") return blocked_gemm(rt, cfg, g, temp);
+  if (cfg.provider == "blocked") return blocked_gemm(rt, cfg, g, temp, epi);
   if (cfg.provider == "clblast") return clblast_gemm(rt, cfg, g, temp);
   throw Error("unknown GEMM provider '" + cfg.provider + "'");
 }
@@ -325,7 +365,7 @@ size_t gemm_temp_bytes_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& 
   return clblast_temp_bytes(rt, cfg, g);
 }
 
-void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
+void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp, const GemmEpilogue& epi) {
   if (g.m == 0 || g.n == 0 || g.batch == 0) return;
   configure_gemm(rt);
   const GemmConfig cfg = choose(rt, g);
@@ -338,7 +378,9 @@ void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp) {
              "clGetMemObjectInfo(gemm temp)");
     if (have < gemm_temp_bytes_with(rt, cfg, g)) temp = nullptr;
   }
+  if (!epi.bias || gemm_fuses_epilogue(cfg, g)) return gemm_with(rt, cfg, g, temp, epi);
   gemm_with(rt, cfg, g, temp);
+  epilogue_pass(rt, g, epi);
 }
 
 size_t gemm_temp_bytes(Runtime& rt, const GemmArgs& g) {

@@ -12,6 +12,11 @@
 // NOVA_GEMM=tuned|clblast|kernels forces a mode: tuned (the default) takes the cache's winner
 // for the shape and the table's CLBlast for shapes without one; clblast ignores the cache. A
 // transposed-A-and-B product always goes to CLBlast.
+//
+// A forward layer may ask for an epilogue, C = act(alpha op(A) op(B) + beta C + bias): nova's
+// own kernels apply it as they store C (after a split reduction's sum, never to a partial), so
+// the output is written once; CLBlast cannot, and gets a second pass over C (bias_act_forward
+// of kernels/activation.cl, in place).
 #include <cstddef>
 #include <functional>
 #include <iosfwd>
@@ -22,9 +27,19 @@
 #include <unordered_map>
 #include <vector>
 
+#include "nova/ops.hpp"
 #include "nova/runtime.hpp"
 
 namespace nova {
+
+// The bias + activation of a dense layer: C = act(C + bias[b * stride_bias + j]) for column j
+// of batch matrix b, applied after the product. No bias: no epilogue. Where CLBlast runs the
+// product, C must be dense (ldc = n, stride_c = m n) and stride_bias = n.
+struct GemmEpilogue {
+  cl_mem bias = nullptr;
+  size_t stride_bias = 0;
+  Activation act = Activation::Identity;
+};
 
 struct GemmArgs {
   bool trans_a = false, trans_b = false;
@@ -47,8 +62,9 @@ GemmProvider gemm_provider(Runtime& rt);
 // Forces a provider for this runtime (benchmarks and tests compare them in one process).
 void set_gemm_provider(Runtime& rt, GemmProvider p);
 
-// Runs the GEMM; `temp` (gemm_temp_bytes large) avoids an allocation per call.
-void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp = nullptr);
+// Runs the GEMM and the epilogue, if any; `temp` (gemm_temp_bytes large) avoids an
+// allocation per call.
+void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp = nullptr, const GemmEpilogue& epi = {});
 size_t gemm_temp_bytes(Runtime& rt, const GemmArgs& g);
 
 // ---- one concrete way to run a GEMM -------------------------------------------------------
@@ -63,9 +79,15 @@ struct GemmConfig {
   bool operator==(const GemmConfig& o) const { return provider == o.provider && params == o.params; }
 };
 // Runs `g` exactly as `cfg` says (no cache, no fallback): the search and tests use it. Throws
-// Error when the configuration cannot run this shape (CLBlast refusing parameters included).
-void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp = nullptr);
+// Error when the configuration cannot run this shape (CLBlast refusing parameters included)
+// or cannot fuse g's epilogue (gemm_fuses_epilogue).
+void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp = nullptr,
+               const GemmEpilogue& epi = {});
 size_t gemm_temp_bytes_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g);
+// Whether `cfg` applies an epilogue in its own store (nova's own kernels, except gemm_tn).
+bool gemm_fuses_epilogue(const GemmConfig& cfg, const GemmArgs& g);
+// The configuration gemm() runs `g` with under the runtime's provider.
+GemmConfig gemm_choice(Runtime& rt, const GemmArgs& g);
 
 // ---- shape classes: what the cache is keyed on --------------------------------------------
 // "nn" (X W), "nt" (dY W^T), "tn" (X^T dY), with the two layer widths exact and the long

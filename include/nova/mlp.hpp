@@ -18,6 +18,9 @@ struct MlpConfig {
   int outputs = 4;
   Activation output_activation = Activation::Identity;
   int networks = 1;  // B: networks of this shape run as batched GEMMs
+  // Layers as one op each (dense: bias + activation fused into the GEMM where nova's own
+  // kernel runs it) or as linear + bias_act (the benchmark compares the two).
+  bool fused_layers = true;
 };
 
 struct Mlp {

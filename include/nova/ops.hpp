@@ -19,7 +19,10 @@ Tensor linear(Tensor x, Tensor w);
 // y = act(h + b), the bias broadcast over rows; h [M, N] or [B, M, N], b [N] or [B, N].
 Tensor bias_act(Tensor h, Tensor b, Activation act);
 
-// A dense layer: bias_act(linear(x, w), b, act).
+// A dense layer, y = act(x w + b): the values of bias_act(linear(x, w), b, act) as one op.
+// Where the tuned GEMM for the shape is one of nova's own kernels, the bias and activation are
+// applied as the product is stored (one pass over y instead of two); with CLBlast they stay a
+// second pass. Saves x, w and y for backward (no pre-activation tensor).
 Tensor dense(Tensor x, Tensor w, Tensor b, Activation act);
 
 // Concatenation along the last dimension; all other dimensions must match.
