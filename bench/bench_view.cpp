@@ -1,8 +1,11 @@
 // nova-bench view: renders views of a trained run with early ray termination off (every
-// sample of every ray, empty space still skipped when the run has grids) and on at one or
-// more sets of check points, timed alternately in one run, and prints the time ratio on/off,
-// the rays terminated, the field evaluations saved and the largest difference from the
-// unterminated render. Built only with nova_io (it loads the run's scene for its cameras).
+// sample of every ray, empty space still skipped when the run has grids) and, per set of
+// check points, in passes with nothing stopped (the pure cost of passes), in passes always
+// (the renderer before its adaptive switch) and adaptive (the default), timed alternately in
+// one run. Prints the time ratio to off, the rays terminated, the chunks run in passes, the
+// field evaluations saved, the largest difference from the unterminated render, and the
+// break-even fraction of stopped rays that EarlyTermination::pays_from stands for. Built only
+// with nova_io (it loads the run's scene for its cameras).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -41,9 +44,9 @@ std::vector<std::vector<int>> parse_checks(const std::string& text) {
   return out;
 }
 
-std::string checks_name(const std::vector<int>& c, int samples) {
-  if (c.empty()) return "on@" + std::to_string(samples / 2);
-  std::string s = "on@";
+std::string checks_name(const std::string& kind, const std::vector<int>& c, int samples) {
+  if (c.empty()) return kind + "@" + std::to_string(samples / 2);
+  std::string s = kind + "@";
   for (size_t i = 0; i < c.size(); ++i) s += (i ? "," : "") + std::to_string(c[i]);
   return s;
 }
@@ -56,10 +59,10 @@ double max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
 
 struct Setting {
   std::string name;
-  bool on = false;
-  std::vector<int> checks;
+  EarlyTermination termination;
+  bool probe = false;           // in passes, nothing stopped: measures what passes cost
   std::vector<double> seconds;  // per view: median over repeats
-  size_t rays = 0, terminated = 0, evaluated = 0, samples = 0, passes = 0;
+  size_t rays = 0, terminated = 0, evaluated = 0, late = 0, samples = 0, passes = 0, chunks = 0, split = 0;
   double rgb_diff = 0, acc_diff = 0, mask_diff = 0, depth_diff = 0;
 };
 
@@ -89,19 +92,21 @@ int view(const Args& args) {
   renderer.set_skip_empty_space(!o.flag("no-skip"));
   std::vector<Setting> settings(1);
   settings[0].name = "off";
+  settings[0].termination.on = false;
   for (const auto& c : parse_checks(o.str("checks"))) {
-    Setting s;
-    s.on = true;
-    s.checks = c;
-    s.name = checks_name(c, run.config.samples);
-    settings.push_back(s);
+    // split: a floor of 0 stops no ray, so its time over off is the cost of the passes alone;
+    // passes: every chunk in passes (pays_from 0); adaptive: the renderer's default.
+    Setting split, always, adaptive;
+    split.termination.checks = always.termination.checks = adaptive.termination.checks = c;
+    split.termination.below = 0.0f;
+    split.termination.pays_from = always.termination.pays_from = 0.0f;
+    split.probe = true;
+    split.name = checks_name("split", c, run.config.samples);
+    always.name = checks_name("passes", c, run.config.samples);
+    adaptive.name = checks_name("adaptive", c, run.config.samples);
+    settings.insert(settings.end(), {split, always, adaptive});
   }
-  auto apply = [&](const Setting& s) {
-    EarlyTermination t;
-    t.on = s.on;
-    t.checks = s.checks;
-    renderer.set_early_termination(t);
-  };
+  auto apply = [&](const Setting& s) { renderer.set_early_termination(s.termination); };
 
   std::vector<ViewRequest> requests;
   const size_t F = scene.frames.size();
@@ -134,8 +139,11 @@ int view(const Args& args) {
           s.rays += st.rays;
           s.terminated += st.terminated;
           s.evaluated += st.evaluated;
+          s.late += st.late;
           s.samples += st.samples;
           s.passes += st.passes;
+          s.chunks += st.split.size();
+          s.split += static_cast<size_t>(std::count(st.split.begin(), st.split.end(), 1));
           if (k == 0) {
             full = img;
           } else {
@@ -163,28 +171,45 @@ int view(const Args& args) {
   const Setting& off = settings[0];
   std::cout << std::left << std::setw(16) << "setting" << std::right << std::setw(10) << "s/view" << std::setw(10)
             << "time/off" << std::setw(12) << "terminated" << std::setw(12) << "evals/off" << std::setw(12)
-            << "evals/all" << std::setw(8) << "passes" << std::setw(11) << "rgb diff" << std::setw(11) << "acc diff"
+            << "evals/all" << std::setw(8) << "passes" << std::setw(10) << "in passes" << std::setw(11) << "rgb diff" << std::setw(11) << "acc diff"
             << std::setw(11) << "mask diff" << std::setw(12) << "depth diff" << "\n";
   std::ostringstream csv;
   csv << "setting,seconds_per_view,time_over_off,rays_terminated,evaluations_over_off,evaluations_over_all,passes,"
-         "max_rgb_diff,max_acc_diff,max_mask_diff,max_depth_diff\n";
+         "chunks_in_passes,max_rgb_diff,max_acc_diff,max_mask_diff,max_depth_diff\n";
+  std::ostringstream even;
   for (const Setting& s : settings) {
     const double per_view = total(s) / static_cast<double>(requests.size());
     const double ratio = total(s) / total(off);
     const double term = static_cast<double>(s.terminated) / static_cast<double>(s.rays);
     const double evals = static_cast<double>(s.evaluated) / static_cast<double>(off.evaluated);
     const double all = static_cast<double>(s.evaluated) / static_cast<double>(s.samples);
+    const double in_passes = static_cast<double>(s.split) / static_cast<double>(std::max<size_t>(1, s.chunks));
     std::cout << std::left << std::setw(16) << s.name << std::right << std::fixed << std::setprecision(3)
               << std::setw(10) << per_view << std::setw(10) << ratio << std::setw(12) << term << std::setw(12)
-              << evals << std::setw(12) << all << std::setw(8) << s.passes << std::scientific << std::setprecision(1)
+              << evals << std::setw(12) << all << std::setw(8) << s.passes << std::setw(10) << in_passes
+              << std::scientific << std::setprecision(1)
               << std::setw(11) << s.rgb_diff << std::setw(11) << s.acc_diff << std::setw(11) << s.mask_diff
               << std::setw(12) << s.depth_diff << std::defaultfloat << "\n";
     csv << s.name << "," << per_view << "," << ratio << "," << term << "," << evals << "," << all << "," << s.passes
-        << "," << s.rgb_diff << "," << s.acc_diff << "," << s.mask_diff << "," << s.depth_diff << "\n";
+        << "," << in_passes << "," << s.rgb_diff << "," << s.acc_diff << "," << s.mask_diff << "," << s.depth_diff
+        << "\n";
+    // Per chunk, off takes t = a + bE (a: the dense part of a graph run, E evaluations) and
+    // split 2a + bE, so o = ratio - 1 = a / t; stopping a fraction f of the rays saves about
+    // f b L (L: the late evaluations, if stopped rays have the average share of them), which
+    // pays from f = a / (b L) = o / ((1 - o) L / E).
+    if (s.probe && s.evaluated > 0) {
+      const double o = ratio - 1, late = static_cast<double>(s.late) / static_cast<double>(s.evaluated);
+      even << s.name << ": passes cost " << std::fixed << std::setprecision(3) << o << " of the time without them, "
+           << late << " of the evaluations come after the first check: break-even at "
+           << (late > 0 && o < 1 ? o / ((1 - o) * late) : 1.0) << " of the rays stopped (pays_from "
+           << EarlyTermination{}.pays_from << ")\n" << std::defaultfloat;
+    }
   }
   std::cout << "\n(terminated: fraction of rays stopped before their last segment; evals: field evaluations, "
                "against the render without termination and against every sample of every NeRF; diffs: largest "
-               "|difference| from the render without termination, over all views)\n\nCSV\n"
+               "|difference| from the render without termination, over all views; in passes: fraction of chunks "
+               "rendered in passes)\n\n"
+            << even.str() << "\nCSV\n"
             << csv.str();
   return 0;
 }

@@ -249,6 +249,8 @@ BOOST_AUTO_TEST_CASE(early_termination_keeps_the_render) {
     const ViewImage full = r.render(req);
     r.set_early_termination(EarlyTermination{});
     const ViewImage term = r.render(req);
+    // A view in one chunk is its own probe: it always runs in passes.
+    BOOST_TEST(std::count(r.last_stats().split.begin(), r.last_stats().split.end(), 0) == 0);
     rays += r.last_stats().rays;
     terminated += r.last_stats().terminated;
     worst_rgb = std::max(worst_rgb, max_abs_diff(term.rgb, full.rgb));
@@ -257,7 +259,7 @@ BOOST_AUTO_TEST_CASE(early_termination_keeps_the_render) {
       worst_other = std::max(worst_other, max_abs_diff(term.masks[m], full.masks[m]));
     worst_depth = std::max(worst_depth, max_abs_diff(term.depth, full.depth) / depth_scale);
     // Split, nothing stopped: the combination itself, to float rounding.
-    r.set_early_termination(EarlyTermination{true, 0.0f, {}});
+    r.set_early_termination(EarlyTermination{true, 0.0f, {}, 0.0f});
     const ViewImage split = r.render(req);
     BOOST_TEST(r.last_stats().terminated == 0u);
     worst_split = std::max({worst_split, max_abs_diff(split.rgb, full.rgb), max_abs_diff(split.acc, full.acc)});
@@ -275,6 +277,79 @@ BOOST_AUTO_TEST_CASE(early_termination_keeps_the_render) {
   BOOST_TEST(worst_depth <= tol);
   BOOST_TEST(worst_split <= noise);
   BOOST_TEST(worst_early > tol);
+}
+
+// The adaptive switch (EarlyTermination::pays_from) on views cut into chunks of 512 rays.
+// Where rays stop (the default floor) most probes pay, so more chunks run in passes than the
+// probes alone, within the bound above. Where none can stop (a floor of 0: the hazy extreme)
+// the first chunk probes, the next `probe_every` run in one pass and equal the unterminated
+// render bit for bit (the same graph over the same samples), then another probe; probes
+// differ by the split's float rounding (1e-5, as above). Termination off never splits. Measured:
+// all 60 chunks in passes where rays stop (each stops >= 15% of its rays; 20 would be probes
+// alone), max |diff| 9.9e-5; probes 2.4e-7 where none can stop.
+BOOST_AUTO_TEST_CASE(early_termination_runs_one_pass_where_it_does_not_pay) {
+  const GridRun& g = grid_run();
+  const Scene& scene = g.scene;
+  const size_t R = 512;
+  ViewRenderer r(runtime(), g.config, ray_geometry(scene), g.checkpoint, static_cast<int>(R));
+  const EarlyTermination defaults;
+  BOOST_REQUIRE(defaults.pays_from > 0.0f);
+  const size_t every = static_cast<size_t>(defaults.probe_every);
+  const double tol = 1e-4 + 1e-5, noise = 1e-5;
+  size_t chunks = 0, probes = 0, paying_split = 0, terminated = 0;
+  double worst_paying = 0, worst_probe = 0;
+  bool one_pass_exact = true;
+  for (const GroundTruthView& v : scene.gt_views) {
+    if (v.kind != "cam0") continue;
+    ViewRequest req;
+    req.camera = v.camera;
+    req.instances = scene_instances(scene.num_objects, v.time);
+    r.set_early_termination(false);
+    const ViewImage full = r.render(req);
+    const std::vector<uint8_t> off = r.last_stats().split;
+    BOOST_TEST(std::count(off.begin(), off.end(), 1) == 0);
+    BOOST_TEST(r.last_stats().passes == off.size());
+    BOOST_REQUIRE(off.size() >= every + 2);  // a probe, one-pass chunks, another probe
+    chunks += off.size();
+    probes += (off.size() + every) / (every + 1);
+
+    r.set_early_termination(defaults);
+    const ViewImage paying = r.render(req);
+    const std::vector<uint8_t>& split = r.last_stats().split;
+    paying_split += static_cast<size_t>(std::count(split.begin(), split.end(), 1));
+    terminated += r.last_stats().terminated;
+    worst_paying = std::max({worst_paying, max_abs_diff(paying.rgb, full.rgb), max_abs_diff(paying.acc, full.acc)});
+
+    EarlyTermination hazy;
+    hazy.below = 0.0f;
+    r.set_early_termination(hazy);
+    const ViewImage one = r.render(req);
+    const std::vector<uint8_t> sched = r.last_stats().split;
+    BOOST_REQUIRE(sched.size() == off.size());
+    const size_t P = static_cast<size_t>(one.width) * one.height;
+    for (size_t c = 0; c < sched.size(); ++c) {
+      const bool probe = c % (every + 1) == 0;
+      BOOST_TEST(sched[c] == probe, "chunk " << c);
+      for (size_t p = c * R; p < std::min(P, (c + 1) * R); ++p) {
+        const double d = std::max(std::fabs(static_cast<double>(one.acc[p]) - full.acc[p]),
+                                  std::fabs(static_cast<double>(one.rgb[p * 3]) - full.rgb[p * 3]));
+        if (probe) worst_probe = std::max(worst_probe, d);
+        if (!probe && !(one.rgb[p * 3] == full.rgb[p * 3] && one.rgb[p * 3 + 1] == full.rgb[p * 3 + 1] &&
+                        one.rgb[p * 3 + 2] == full.rgb[p * 3 + 2] && one.acc[p] == full.acc[p] &&
+                        one.depth[p] == full.depth[p]))
+          one_pass_exact = false;
+      }
+    }
+    BOOST_TEST(r.last_stats().terminated == 0u);
+  }
+  BOOST_TEST_MESSAGE("adaptive termination, " << chunks << " chunks of " << R << " rays: " << paying_split
+                     << " in passes where rays stop (" << terminated << " rays stopped, max |diff| " << worst_paying
+                     << "), " << probes << " probes where none can; probe chunks max |diff| " << worst_probe);
+  BOOST_TEST(terminated > 0u);
+  BOOST_TEST(paying_split > probes);  // the switch kept passes where they pay
+  BOOST_TEST(worst_paying <= tol);
+  BOOST_TEST(one_pass_exact);
+  BOOST_TEST(worst_probe <= noise);
 }
 
 BOOST_AUTO_TEST_CASE(mismatched_checkpoints_are_refused) {

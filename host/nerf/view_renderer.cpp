@@ -111,6 +111,11 @@ void ViewRenderer::set_early_termination(const EarlyTermination& t) {
   }
   if (!(t.below >= 0.0f && t.below <= 1.0f))
     throw Error("early termination: the transmittance floor must lie in [0, 1], got " + std::to_string(t.below));
+  if (!(t.pays_from >= 0.0f && t.pays_from <= 1.0f))
+    throw Error("early termination: the fraction of rays stopped at which passes pay must lie in [0, 1], got " +
+                std::to_string(t.pays_from));
+  if (t.probe_every < 0)
+    throw Error("early termination: chunks between probes must be >= 0, got " + std::to_string(t.probe_every));
   termination_ = t;
 }
 
@@ -208,7 +213,11 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
   stats_ = RenderStats{};
   stats_.rays = P;
   stats_.samples = P * S * static_cast<size_t>(N);
-  const std::vector<size_t> bounds = segments();
+  const std::vector<size_t> passes = segments(), whole{0, S};
+  // The adaptive switch (EarlyTermination::pays_from): whether the last probe paid, and the
+  // one-pass chunks since. Per view, so that a render depends on its request alone.
+  bool pays = true;
+  int since_probe = 0;
   std::vector<float> pixels(R * 2);
   for (size_t first = 0; first < P; first += R) {
     const size_t n = std::min(R, P - first);
@@ -223,11 +232,16 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
     std::vector<float> T(R, 0.0f);
     std::fill_n(T.begin(), n, 1.0f);
     std::vector<uint8_t> open(R, 0);
+    const bool split = passes.size() > 2 && (pays || since_probe >= termination_.probe_every);
+    since_probe = split ? 0 : since_probe + 1;
+    stats_.split.push_back(split);
+    const std::vector<size_t>& bounds = split ? passes : whole;
+    size_t stopped = 0;
     for (size_t k = 0; k + 1 < bounds.size(); ++k) {
       size_t live = 0;
       for (size_t r = 0; r < n; ++r) {
         const bool now = T[r] >= termination_.below;
-        if (k > 0 && open[r] && !now) ++stats_.terminated;
+        if (k > 0 && open[r] && !now) ++stopped;
         open[r] = now;
         live += now;
       }
@@ -242,7 +256,10 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
       c.exec->forward();
       ++stats_.passes;
       for (auto& pack : {vg.pack_static, vg.pack_objects})
-        if (pack) stats_.evaluated += pack->kept;
+        if (pack) {
+          stats_.evaluated += pack->kept;
+          if (k > 0) stats_.late += pack->kept;
+        }
       if (!vg.pack_static && !vg.pack_objects) stats_.evaluated += R * S * static_cast<size_t>(N);
       const std::vector<float> rgb = c.exec->get(vg.out.rgb), depth = c.exec->get(vg.out.depth),
                                acc = c.exec->get(vg.out.acc), mask = c.exec->get(vg.out.mask);
@@ -259,6 +276,8 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
         T[r] *= std::max(0.0f, 1.0f - acc[r]);
       }
     }
+    stats_.terminated += stopped;
+    if (split) pays = static_cast<double>(stopped) >= static_cast<double>(termination_.pays_from) * static_cast<double>(n);
   }
   return img;
 }

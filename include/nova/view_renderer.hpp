@@ -64,6 +64,14 @@ struct EarlyTermination {
   float below = 1e-4f;
   // Sample indices (ascending, in (0, S)) where the transmittance is checked; empty: S / 2.
   std::vector<int> checks;
+  // Passes pay only where rays stop: each extra pass costs the dense part of a graph run (ray
+  // samples, the pack test, compositing) whatever it saves, so a hazy view renders slower in
+  // passes. Per view, the first chunk is a probe (in passes); while the last probe stopped
+  // fewer than `pays_from` of its rays, the next `probe_every` chunks run in one pass (the
+  // render without termination, bit for bit where the run has grids), then another probe. 0.15: `nova-bench view` measured the
+  // break-even at 0.12-0.23 on 2 CPU cores (README, "Known issues"); 0: every chunk in passes.
+  float pays_from = 0.15f;
+  int probe_every = 4;
 };
 
 // What the last render did (its pixels; a graph without packing also evaluates the padded
@@ -74,6 +82,10 @@ struct RenderStats {
   size_t passes = 0;      // graph runs
   // Field evaluations (a sample of one NeRF), and those a render without any skip would run.
   size_t evaluated = 0, samples = 0;
+  // Of `evaluated`, those after the first check in chunks run in passes (`nova-bench view`
+  // weighs what stopping can save by them).
+  size_t late = 0;
+  std::vector<uint8_t> split;  // per chunk of rays: 1 if it ran in passes, 0 in one
 };
 
 class ViewRenderer {
