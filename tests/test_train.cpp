@@ -55,6 +55,19 @@ Scene tiny_scene() {
   return load_scene(cached_tiny_scene().string(), o);
 }
 
+// The scene as trained seen from camera 0 at each ground-truth time (the eval protocol).
+std::vector<ViewRequest> cam0_requests(const Scene& scene) {
+  std::vector<ViewRequest> out;
+  for (const GroundTruthView& v : scene.gt_views) {
+    if (v.kind != "cam0") continue;
+    ViewRequest req;
+    req.camera = v.camera;
+    req.instances = scene_instances(scene.num_objects, v.time);
+    out.push_back(req);
+  }
+  return out;
+}
+
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
@@ -204,11 +217,7 @@ BOOST_AUTO_TEST_CASE(skipping_empty_space_keeps_the_render) {
   BOOST_REQUIRE(r.skips_empty_space());
   r.set_early_termination(false);  // this case measures skipping alone
   double worst = 1e9;
-  for (const GroundTruthView& v : scene.gt_views) {
-    if (v.kind != "cam0") continue;
-    ViewRequest req;
-    req.camera = v.camera;
-    req.instances = scene_instances(scene.num_objects, v.time);
+  for (const ViewRequest& req : cam0_requests(scene)) {
     r.set_skip_empty_space(true);
     const ViewImage skipped = r.render(req);
     r.set_skip_empty_space(false);
@@ -240,11 +249,7 @@ BOOST_AUTO_TEST_CASE(early_termination_keeps_the_render) {
   const double tol = 1e-4 + 1e-5, noise = 1e-5, depth_scale = std::max(1.0f, geo.far);
   size_t rays = 0, terminated = 0;
   double worst_rgb = 0, worst_other = 0, worst_depth = 0, worst_split = 0, worst_early = 0;
-  for (const GroundTruthView& v : scene.gt_views) {
-    if (v.kind != "cam0") continue;
-    ViewRequest req;
-    req.camera = v.camera;
-    req.instances = scene_instances(scene.num_objects, v.time);
+  for (const ViewRequest& req : cam0_requests(scene)) {
     r.set_early_termination(false);
     const ViewImage full = r.render(req);
     r.set_early_termination(EarlyTermination{});
@@ -299,11 +304,7 @@ BOOST_AUTO_TEST_CASE(early_termination_runs_one_pass_where_it_does_not_pay) {
   size_t chunks = 0, probes = 0, paying_split = 0, terminated = 0;
   double worst_paying = 0, worst_probe = 0;
   bool one_pass_exact = true;
-  for (const GroundTruthView& v : scene.gt_views) {
-    if (v.kind != "cam0") continue;
-    ViewRequest req;
-    req.camera = v.camera;
-    req.instances = scene_instances(scene.num_objects, v.time);
+  for (const ViewRequest& req : cam0_requests(scene)) {
     r.set_early_termination(false);
     const ViewImage full = r.render(req);
     const std::vector<uint8_t> off = r.last_stats().split;
