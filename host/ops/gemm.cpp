@@ -139,24 +139,6 @@ size_t blocked_temp_floats(const GemmArgs& g, const Blocked& p) {
          (splits > 1 ? splits * g.batch * g.m * g.n : 0);
 }
 
-// Launches with a work-group of at most 16 column blocks x (64 / that) row blocks: small
-// enough that a CPU device gets many groups to share among its threads.
-void enqueue2(Runtime& rt, cl_kernel kernel, size_t n0, size_t n1, size_t max0) {
-  const size_t wg = std::min<size_t>(64, rt.work_group_size(kernel));
-  const size_t* max_items = rt.info().max_work_item_sizes;
-  size_t l0 = 1;
-  while (l0 < n0 && l0 * 2 <= max0 && l0 * 2 <= wg && l0 * 2 <= max_items[0]) l0 *= 2;
-  size_t l1 = 1;
-  while (l1 < n1 && l0 * l1 * 2 <= wg && l1 * 2 <= max_items[1]) l1 *= 2;
-  const size_t local[2] = {l0, l1};
-  const size_t global[2] = {(n0 + l0 - 1) / l0 * l0, (n1 + l1 - 1) / l1 * l1};
-  const size_t size[2] = {n0, n1};
-  rt.note_launch(kernel, 2, size, local);
-  cl_check(clEnqueueNDRangeKernel(rt.queue(), kernel, 2, nullptr, global, local, 0, nullptr,
-                                  nullptr),
-           "clEnqueueNDRangeKernel(gemm_blk)");
-}
-
 void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp,
                   const GemmEpilogue& epi) {
   using detail::u32;
@@ -195,9 +177,8 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
     stride_a = g.m * g.k;
     poff += at;
   }
-  cl_kernel kernel = rt.kernel("gemm", "gemm_blk", options);
   const size_t kc = splits > 1 ? p.kc : std::max<size_t>(g.k, 1);
-  Launch blk(rt, kernel);
+  Launch blk = rt.launch("gemm", "gemm_blk", options);
   blk.arg(a).arg(b).arg(g.c).arg(splits > 1 ? temp : g.c).arg(u32(poff, "gemm partials"))
       .arg(u32(g.m, "gemm m")).arg(u32(g.n, "gemm n")).arg(u32(g.k, "gemm k"))
       .arg(u32(a_rs, "gemm lda")).arg(u32(a_cs, "gemm lda"))
@@ -207,7 +188,9 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
       .arg(u32(kc, "gemm kc")).arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta);
   epilogue_args(blk, g, epi);
   const size_t bn = 8 * p.vn;
-  enqueue2(rt, kernel, (g.n + bn - 1) / bn, (g.m + p.rm - 1) / p.rm * g.batch * splits, 16);
+  // A work-group of at most 16 column blocks x (64 / that) row blocks: small enough that a
+  // CPU device gets many groups to share among its threads.
+  blk.run2((g.n + bn - 1) / bn, (g.m + p.rm - 1) / p.rm * g.batch * splits, 64, 16);
   if (splits > 1) {
     Launch reduce = rt.launch("gemm", "gemm_reduce", options);
     reduce.arg(temp).arg(u32(poff, "gemm partials")).arg(g.c).arg(u32(g.m, "gemm m"))

@@ -207,14 +207,16 @@ void Launch::run(size_t n) {
            "clEnqueueNDRangeKernel");
 }
 
-void Launch::run2(size_t n0, size_t n1) {
+void Launch::run2(size_t n0, size_t n1, size_t max_group, size_t max0) {
   if (n0 == 0 || n1 == 0) return;
   // Dimension 0 takes as much of the work-group as it can use: it is the contiguous one.
   // Powers of two within the kernel's work-group size and the device's per-dimension limits.
-  const size_t wg = rt_.work_group_size(kernel_);
+  const size_t own = rt_.work_group_size(kernel_);
+  const size_t wg = max_group ? std::min(max_group, own) : own;
   const size_t* max_items = rt_.info().max_work_item_sizes;
+  const size_t cap0 = max0 ? std::min(max0, max_items[0]) : max_items[0];
   size_t l0 = 1;
-  while (l0 * 2 <= wg && l0 * 2 <= max_items[0] && l0 < n0) l0 *= 2;
+  while (l0 * 2 <= wg && l0 * 2 <= cap0 && l0 < n0) l0 *= 2;
   size_t l1 = 1;
   while (l0 * l1 * 2 <= wg && l1 * 2 <= max_items[1] && l1 < n1) l1 *= 2;
   const size_t local[2] = {l0, l1};

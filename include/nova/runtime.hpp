@@ -98,8 +98,10 @@ class Launch {
   // 1D over n items; the work-group size comes from the device and kernel, the global size
   // is rounded up, and kernels guard with their own count.
   void run(size_t n);
-  // 2D over (n0, n1), dimension 0 fastest.
-  void run2(size_t n0, size_t n1);
+  // 2D over (n0, n1), dimension 0 fastest. `max_group` caps the work-group (0: the kernel's
+  // own limit) and `max0` its extent along dimension 0 (0: no cap), e.g. to leave a CPU
+  // device many groups to share among its threads.
+  void run2(size_t n0, size_t n1, size_t max_group = 0, size_t max0 = 0);
 
  private:
   Runtime& rt_;
