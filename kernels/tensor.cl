@@ -18,3 +18,14 @@ __kernel void copy_cols_back(__global const float* ddst, __global float* dsrc, u
   const float g = ddst[(size_t)r * dst_cols + offset + c];
   dsrc[i] = accumulate ? dsrc[i] + g : g;
 }
+
+// Backward of a gradient gate: dx[m, c] (+)= dy[m, c] gate[offset + m / group] (its forward
+// is a copy).
+__kernel void gate_rows_back(__global const float* dy, __global const float* gate,
+                             __global float* dx, uint rows, uint cols, uint group, uint offset,
+                             int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= rows * cols) return;
+  const float g = dy[i] * gate[offset + i / cols / group];
+  dx[i] = accumulate ? dx[i] + g : g;
+}

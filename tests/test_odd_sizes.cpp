@@ -240,6 +240,29 @@ BOOST_AUTO_TEST_CASE(tensor_copies) {
   expect_close(out, ref, 0, 0, "concat is an exact copy");
   expect_grad_close(da, da_ref, "d concat / d a");
   expect_grad_close(db, db_ref, "d concat / d b");
+
+  // gradient_gate (copy_cols forward, gate_rows_back) on [kRows * 3, 5] with a [2, kRows] gate.
+  const auto x = random_floats(kRows * 15, -1, 1, 124), gt = random_floats(kRows * 15, -1, 1, 125);
+  auto gate = random_floats(2 * kRows, 0, 1, 126);
+  for (float& v : gate) v = v < 0.5f ? 0.0f : v;
+  Graph gg;
+  Tensor tx = gg.input("x", Shape{kRows * 3, 5}, true), tg = gg.input("gate", Shape{2, kRows});
+  Tensor gy = gradient_gate(tx, tg, 1);
+  Tensor gtarget = gg.input("target", gy.shape());
+  gg.keep(gy);
+  gg.set_loss(mse(gy, gtarget));
+  Executor gex(rt(), gg);
+  gex.set(tx, x);
+  gex.set(tg, gate);
+  gex.set(gtarget, gt);
+  gex.forward();
+  gex.backward();
+  const auto gout = gex.get(gy);
+  const auto gup = mse_upstream(gout, gt);
+  std::vector<double> dx_ref(x.size());
+  for (size_t i = 0; i < x.size(); ++i) dx_ref[i] = gup[i] * gate[kRows + i / 15];
+  expect_close(gout, test::to_double(x), 0, 0, "gradient_gate forward is an exact copy");
+  expect_grad_close(gex.get_grad(tx), dx_ref, "d gradient_gate / d x");
 }
 
 // loss.cl: every loss forward and backward (mse: sq_err_*; masked_mse: masked_sq_err_*;

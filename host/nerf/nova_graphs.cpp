@@ -162,6 +162,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->pack_static = new_select(c.occupancy, {0});
   s->pack_objects = new_select(c.occupancy, object_grids(K));
   Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
+  if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
   Tensor raw_objects = object_raw(smp.positions[1], s->times, field, s->pack_objects);
   Tensor raw = stack({raw_static, raw_objects});
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);

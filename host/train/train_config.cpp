@@ -163,6 +163,8 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.weights.sparsity; }));
   o.push_back(float_option("w-distortion", "weight of the distortion loss: each object NeRF's weight spread along the rays of its mask (streaks; joint training)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_distortion; }));
+  o.push_back(bool_option("static-background-only", "joint training: the static NeRF learns from background pixels only (object pixels send it no gradient; not in the reference)",
+                          [](TrainConfig& c) -> bool& { return c.static_background_only; }));
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(bool_option("occupancy", "skip empty space: occupancy grids from the density, samples in empty cells never reach an MLP",

@@ -35,6 +35,12 @@ Tensor positional_encoding(Tensor p, int frequencies);
 // Mean over all elements of (pred - target)^2: a scalar.
 Tensor mse(Tensor pred, Tensor target);
 
+// y = x; the backward passes x's gradient scaled per group of rows: dx[r * G + j] = dy[r * G + j]
+// gate[gate_row, r] for x [R * G, C] and gate [rows, R] (data, no gradient). Deliberately not
+// the derivative of the forward: a gate of 0 stops what flows through those rows, 1 is the
+// identity. Joint training gates the static NeRF's samples with each ray's background mask.
+Tensor gradient_gate(Tensor x, Tensor gate, size_t gate_row = 0);
+
 // sum_i weights[i] * terms[i] over scalars.
 Tensor weighted_sum(const std::vector<Tensor>& terms, const std::vector<float>& weights);
 

@@ -38,6 +38,10 @@ struct TrainConfig {
   // Distortion loss (losses.hpp) of each object NeRF on its mask's rays in joint training: a
   // prior for one surface per ray against streaks (not in the reference: 0 there).
   float w_distortion = 0.0f;
+  // In joint training the static NeRF gets no gradient from rays of object pixels (as in its
+  // pretraining): otherwise, wherever an object NeRF is not yet opaque, the composite loss
+  // paints the object's colours into the background along its path (not in the reference).
+  bool static_background_only = false;
   // Empty-space skipping (occupancy.hpp): one grid per NeRF, updated from the density every
   // occupancy_every steps once occupancy_warmup steps of a phase have passed; samples in
   // empty cells never reach an MLP.
