@@ -76,3 +76,85 @@ __kernel void depth_loss_backward(__global const float* p, __global const float*
     dp[r] = accumulate ? dp[r] + d : d;
   }
 }
+
+// Free-space loss: the disparity says where each ray's first surface is; samples well in front
+// of it are empty space. The target z*_r = m_p + s_p / s_t (t_r - m_t) maps the target into
+// the units of the rendered depth p with the moments of the valid rays (as the depth loss
+// standardises both), a constant here (no gradient to p). For NeRF n >= first on ray r, with
+// its own weights w_i = T_i alpha_i and h_i = max(0, z*_r - margin - z_i):
+//   partial[n R + r] = valid_r mask_n(r) sum_i w_i h_i.
+// Unlike the depth loss on the expected depth, this sees a haze in front of a surface even
+// where the expected depth is right, and unlike the distortion loss it sees a compact layer
+// at the wrong depth. Layout as kernels/distortion.cl (raw [N, R*S, C], sigma in channel 3).
+inline float fs_alpha(float s, float d) { return -expm1(-fmax(s, 0.0f) * d); }
+
+__kernel void free_space_partial(__global const float* raw, __global const float* delta,
+                                 __global const float* z, __global const float* p,
+                                 __global const float* t, __global const float* valid,
+                                 __global const float* mask, __global const float* noise,
+                                 __global float* partial, uint N, uint R, uint S, uint C,
+                                 uint delta_stride, int use_noise, uint first, float margin) {
+  const uint nr = get_global_id(0);
+  if (nr >= N * R) return;
+  const uint n = nr / R, r = nr % R;
+  const depth_stats st = depth_moments(p, t, valid, R);
+  const float m = n < first || st.n < 2.0f ? 0.0f : valid[r] * mask[nr];
+  if (m == 0.0f) {
+    partial[nr] = 0.0f;
+    return;
+  }
+  const float zt = st.mp + st.sp / st.st * (t[r] - st.mt) - margin;
+  float T = 1.0f, L = 0.0f;
+  for (uint i = 0; i < S; ++i) {
+    const size_t e = (size_t)n * R * S + (size_t)r * S + i;
+    const float a = fs_alpha(raw[e * C + 3] + (use_noise ? noise[e] : 0.0f),
+                             delta[n * delta_stride + r * S + i]);
+    L += T * a * fmax(zt - z[(size_t)r * S + i], 0.0f);
+    T *= 1.0f - a;
+  }
+  partial[nr] = m * L;
+}
+
+// d raw (sigma only): dL/dalpha_i = T_i (h_i - A_i), A_i = sum_{k>i} h_k alpha_k
+// prod_{i<j<k} (1 - alpha_j), walked backwards (A_{i-1} = h_i alpha_i + (1 - alpha_i) A_i);
+// `work` keeps the forward walk's T ([N*R*S]). Work-items nr < R also clear dp (the rendered
+// depth gets no gradient from this loss) when they are its first writer.
+__kernel void free_space_backward(__global const float* raw, __global const float* delta,
+                                  __global const float* z, __global const float* p,
+                                  __global const float* t, __global const float* valid,
+                                  __global const float* mask, __global const float* noise,
+                                  __global const float* gloss, __global float* work,
+                                  __global float* grad, __global float* dp, uint N, uint R,
+                                  uint S, uint C, uint delta_stride, int use_noise, uint first,
+                                  float margin, float scale, int accumulate, int clear_dp) {
+  const uint nr = get_global_id(0);
+  if (nr >= N * R) return;
+  if (clear_dp && nr < R) dp[nr] = 0.0f;
+  const uint n = nr / R, r = nr % R;
+  const depth_stats st = depth_moments(p, t, valid, R);
+  const float coef = n < first || st.n < 2.0f ? 0.0f : gloss[0] * scale * valid[r] * mask[nr];
+  const float zt = st.mp + st.sp / st.st * (t[r] - st.mt) - margin;
+  const size_t first_e = (size_t)n * R * S + (size_t)r * S;
+  __global float* ts = work + first_e;
+  float T = 1.0f;
+  for (uint i = 0; i < S; ++i) {
+    ts[i] = T;
+    T *= 1.0f - fs_alpha(raw[(first_e + i) * C + 3] + (use_noise ? noise[first_e + i] : 0.0f),
+                         delta[n * delta_stride + r * S + i]);
+  }
+  float A = 0.0f;
+  for (uint k = S; k-- > 0;) {
+    const size_t e = first_e + k;
+    const float s = raw[e * C + 3] + (use_noise ? noise[e] : 0.0f);
+    const float d = delta[n * delta_stride + r * S + k];
+    const float a = fs_alpha(s, d), h = fmax(zt - z[(size_t)r * S + k], 0.0f);
+    const float ex = exp(-fmax(s, 0.0f) * d);
+    // d alpha / d raw = delta exp(-sigma delta) above the ReLU; 0 once exp underflows.
+    const float dsig = s > 0.0f && ex > 0.0f && coef != 0.0f ? coef * ts[k] * (h - A) * ex * d : 0.0f;
+    for (uint c = 0; c < C; ++c) {
+      const float v = c == 3 ? dsig : 0.0f;
+      grad[e * C + c] = accumulate ? grad[e * C + c] + v : v;
+    }
+    A = h * a + (1.0f - a) * A;
+  }
+}

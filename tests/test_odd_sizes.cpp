@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "free_space_reference.hpp"
 #include "harness.hpp"
 #include "loss_reference.hpp"
 #include "nova/compose_spec.hpp"
@@ -579,6 +580,52 @@ BOOST_AUTO_TEST_CASE(depth_loss_kernels) {
     fd[r] = (lp - lm) / (2 * h);
   }
   expect_close(ex.get_grad(tp), fd, 1e-4 * max_abs(fd), 1e-3, "d depth_loss / d depth");
+
+  // free_space_partial / free_space_backward: 2 NeRFs x 1009 rays x 3 samples against the
+  // float64 reference and its central differences (tests/test_free_space_loss_op.cpp states
+  // the tolerances).
+  FreeSpaceCase f;
+  f.N = 2, f.R = kRows, f.S = 3;
+  f.raw = random_floats(f.N * kRows * f.S * f.C, -1, 1, 183);
+  for (size_t e = 0; e < f.N * kRows * f.S; ++e) f.raw[e * f.C + 3] = 0.3f + std::fabs(f.raw[e * f.C + 3]) * 3;
+  f.delta = random_floats(f.N * kRows * f.S, 0.1f, 0.4f, 184);
+  for (size_t r = 0; r < kRows; ++r)
+    for (size_t i = 0; i < f.S; ++i) f.z.push_back(0.2f + 0.3f * i);
+  f.depth = p;
+  f.target = t;
+  f.valid = w;
+  f.masks = random_floats(f.N * kRows, 0, 1, 185);
+  for (float& m : f.masks) m = m < 0.3f ? 0.0f : 1.0f;
+  Graph fg;
+  Tensor fraw = fg.input("raw", Shape{f.N, kRows * f.S, f.C}, true);
+  Tensor fdelta = fg.input("delta", Shape{f.N, kRows, f.S}), fz = fg.input("z", Shape{kRows, f.S});
+  Tensor fp = fg.input("depth", s), ft = fg.input("target", s), fw = fg.input("valid", s);
+  Tensor fm = fg.input("masks", Shape{f.N, kRows});
+  fg.set_loss(free_space_loss(fraw, fdelta, fz, fp, ft, fw, fm, Tensor{}, f.margin, f.first));
+  Executor fex(rt(), fg);
+  fex.set(fraw, f.raw);
+  fex.set(fdelta, f.delta);
+  fex.set(fz, f.z);
+  fex.set(fp, f.depth);
+  fex.set(ft, f.target);
+  fex.set(fw, f.valid);
+  fex.set(fm, f.masks);
+  fex.forward();
+  fex.backward();
+  expect_close({fex.loss()}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss");
+  std::vector<double> ffd(f.raw.size(), 0.0);
+  std::vector<float> x = f.raw;
+  for (size_t e = 0; e < f.N * kRows * f.S; ++e) {
+    const size_t i = e * f.C + 3;
+    const float x0 = x[i];
+    x[i] = x0 + 1e-3f;
+    const double lp = free_space_reference(f, x);
+    x[i] = x0 - 1e-3f;
+    const double lm = free_space_reference(f, x);
+    x[i] = x0;
+    ffd[i] = (lp - lm) / (double(x0 + 1e-3f) - double(x0 - 1e-3f));
+  }
+  expect_close(fex.get_grad(fraw), ffd, 1e-5 * max_abs(ffd), 1e-3, "d free_space_loss / d raw");
 }
 
 // The sweep above covers every kernel of every embedded family (parsed from the sources).

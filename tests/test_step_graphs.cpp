@@ -56,6 +56,26 @@ BOOST_AUTO_TEST_CASE(distortion_term_only_when_weighted) {
   BOOST_TEST(ops_of_type(pretrain->graph, "distortion_loss") == 0u);
 }
 
+BOOST_AUTO_TEST_CASE(free_space_term_needs_weight_and_disparity) {
+  TrainConfig c = small_config();
+  c.w_depth = 0.0f;
+  c.w_free_space = 1.0f;
+  RayGeometry geo = two_objects();
+  auto joint = build_joint_graph(c, geo);  // no disparity maps: nothing to place the surface
+  BOOST_TEST(ops_of_type(joint->graph, "free_space_loss") == 0u);
+  BOOST_TEST(!joint->target_depth.valid());
+  geo.disparity = true;
+  joint = build_joint_graph(c, geo);
+  BOOST_TEST(ops_of_type(joint->graph, "free_space_loss") == 1u);
+  BOOST_TEST(ops_of_type(joint->graph, "depth_loss") == 0u);  // w-depth 0: its own term stays out
+  BOOST_TEST(joint->target_depth.valid());
+  BOOST_TEST(has_term(*joint, "free_space"));
+  // The static NeRF takes no part: pretraining has no free-space term.
+  BOOST_TEST(ops_of_type(build_pretrain_graph(c, geo)->graph, "free_space_loss") == 0u);
+  c.w_free_space = 0.0f;
+  BOOST_TEST(ops_of_type(build_joint_graph(c, geo)->graph, "free_space_loss") == 0u);
+}
+
 BOOST_AUTO_TEST_CASE(zero_weight_terms_are_not_built) {
   TrainConfig c = small_config();
   c.weights.sparsity = 0.0f;

@@ -80,22 +80,39 @@ RayGeometry ray_geometry(const Scene& scene) {
 }
 
 bool depth_term_active(const TrainConfig& c, const RayGeometry& g) {
-  return c.w_depth > 0.0f && g.disparity && g.ndc;
+  return (c.w_depth > 0.0f || c.w_free_space > 0.0f) && g.disparity && g.ndc;
 }
 
 namespace {
 
+// The per-ray disparity inputs of the depth terms (created once).
+void add_depth_inputs(StepGraph& s, const TrainConfig& c) {
+  if (s.target_depth.valid()) return;
+  const Shape rays{static_cast<size_t>(c.rays)};
+  s.target_depth = s.graph.input("target_depth", rays);
+  s.depth_valid = s.graph.input("depth_valid", rays);
+}
+
 // Adds w_depth * depth_loss(depth, -disparity) to `loss` when the scene supports it.
 Tensor with_depth_term(StepGraph& s, const TrainConfig& c, const RayGeometry& geo, Tensor depth,
                        Tensor loss) {
-  if (!depth_term_active(c, geo)) return loss;
-  Graph& g = s.graph;
-  const Shape rays{static_cast<size_t>(c.rays)};
-  s.target_depth = g.input("target_depth", rays);
-  s.depth_valid = g.input("depth_valid", rays);
+  if (!depth_term_active(c, geo) || c.w_depth <= 0.0f) return loss;
+  add_depth_inputs(s, c);
   Tensor d = depth_loss(depth, s.target_depth, s.depth_valid);
   s.terms.emplace_back("depth", d);
   return weighted_sum({loss, d}, {1.0f, c.w_depth});
+}
+
+// Adds w_free_space * free_space_loss of the object NeRFs on their masks' rays (joint
+// training, scenes with disparity in NDC).
+Tensor with_free_space_term(StepGraph& s, const TrainConfig& c, const RayGeometry& geo,
+                            Tensor raw, const Samples& smp, Tensor depth, Tensor loss) {
+  if (!depth_term_active(c, geo) || c.w_free_space <= 0.0f) return loss;
+  add_depth_inputs(s, c);
+  Tensor f = free_space_loss(raw, smp.delta, smp.z, depth, s.target_depth, s.depth_valid,
+                             s.target_masks, s.noise, c.free_space_margin, 1);
+  s.terms.emplace_back("free_space", f);
+  return weighted_sum({loss, f}, {1.0f, c.w_free_space});
 }
 
 // Adds w_distortion * distortion_loss of the object NeRFs (NeRF 0 is the static one), each
@@ -174,6 +191,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
     if (t.valid()) s->terms.emplace_back(name, t);
   s->loss = with_distortion_term(*s, c, raw, smp, s->target_masks,
                                  with_depth_term(*s, c, geo, out.depth, l.total));
+  s->loss = with_free_space_term(*s, c, geo, raw, smp, out.depth, s->loss);
   // The progress PSNR is of the composite colour; without its loss term it is measured
   // separately (a forward-only mse nothing back-propagates through).
   s->psnr_mse = l.full_rgb.valid() ? l.full_rgb : mse(out.rgb, s->target_rgb);

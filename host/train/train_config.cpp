@@ -165,6 +165,10 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.w_distortion; }));
   o.push_back(bool_option("static-background-only", "joint training: the static NeRF learns from background pixels only (object pixels send it no gradient; not in the reference)",
                           [](TrainConfig& c) -> bool& { return c.static_background_only; }));
+  o.push_back(float_option("w-free-space", "weight of the free-space loss: object weight in front of the surface the disparity gives, on its mask's rays (joint training; NDC scenes with disp/ only; not in the reference)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.w_free_space; }));
+  o.push_back(float_option("free-space-margin", "free-space loss: depth (NDC t) in front of the disparity's surface that still counts as the surface", 0.0, 1.0,
+                           [](TrainConfig& c) -> float& { return c.free_space_margin; }));
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(bool_option("occupancy", "skip empty space: occupancy grids from the density, samples in empty cells never reach an MLP",

@@ -42,6 +42,11 @@ struct TrainConfig {
   // pretraining): otherwise, wherever an object NeRF is not yet opaque, the composite loss
   // paints the object's colours into the background along its path (not in the reference).
   bool static_background_only = false;
+  // Free-space loss (losses.hpp) of the object NeRFs in joint training: no weight more than
+  // free_space_margin (in the rendered depth's units: NDC t) in front of the depth the
+  // disparity gives (not in the reference: 0 there).
+  float w_free_space = 0.0f;
+  float free_space_margin = 0.05f;
   // Empty-space skipping (occupancy.hpp): one grid per NeRF, updated from the density every
   // occupancy_every steps once occupancy_warmup steps of a phase have passed; samples in
   // empty cells never reach an MLP.
