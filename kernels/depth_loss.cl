@@ -78,15 +78,40 @@ __kernel void depth_loss_backward(__global const float* p, __global const float*
 }
 
 // Free-space loss: the disparity says where each ray's first surface is; samples well in front
-// of it are empty space. The target z*_r = m_p + s_p / s_t (t_r - m_t) maps the target into
-// the units of the rendered depth p with the moments of the valid rays (as the depth loss
-// standardises both), a constant here (no gradient to p). For NeRF n >= first on ray r, with
-// its own weights w_i = T_i alpha_i and h_i = max(0, z*_r - margin - z_i):
+// of it are empty space. The target z*_r = a + b t_r maps the target into the units of the
+// rendered depth p by a least-squares fit of p on t over the valid background rays (mask row
+// 0), where the static NeRF, pretrained on such pixels, gives a depth to trust; on object
+// rays p is not (a hazy object renders a small p). A constant here: p gets no gradient. For
+// NeRF n >= first on ray r, with its own weights w_i = T_i alpha_i and
+// h_i = max(0, z*_r - margin - z_i):
 //   partial[n R + r] = valid_r mask_n(r) sum_i w_i h_i.
 // Unlike the depth loss on the expected depth, this sees a haze in front of a surface even
 // where the expected depth is right, and unlike the distortion loss it sees a compact layer
 // at the wrong depth. Layout as kernels/distortion.cl (raw [N, R*S, C], sigma in channel 3).
 inline float fs_alpha(float s, float d) { return -expm1(-fmax(s, 0.0f) * d); }
+
+// (a, b, n) of the fit p ~ a + b t over the rays with valid[r] mask[r] (mask row 0); n < 2:
+// no fit. One work-item's fixed-order sums, like depth_moments.
+inline float3 fs_fit(__global const float* p, __global const float* t,
+                     __global const float* valid, __global const float* mask, uint R) {
+  float n = 0.0f, sp = 0.0f, st = 0.0f;
+  for (uint r = 0; r < R; ++r) {
+    const float w = valid[r] * mask[r];
+    n += w;
+    sp += w * p[r];
+    st += w * t[r];
+  }
+  if (n < 2.0f) return (float3)(0.0f, 0.0f, n);
+  const float mp = sp / n, mt = st / n;
+  float cov = 0.0f, vt = 0.0f;
+  for (uint r = 0; r < R; ++r) {
+    const float w = valid[r] * mask[r], dt = t[r] - mt;
+    cov += w * (p[r] - mp) * dt;
+    vt += w * dt * dt;
+  }
+  const float b = cov / (vt + DEPTH_EPS * n);
+  return (float3)(mp - b * mt, b, n);
+}
 
 __kernel void free_space_partial(__global const float* raw, __global const float* delta,
                                  __global const float* z, __global const float* p,
@@ -97,13 +122,13 @@ __kernel void free_space_partial(__global const float* raw, __global const float
   const uint nr = get_global_id(0);
   if (nr >= N * R) return;
   const uint n = nr / R, r = nr % R;
-  const depth_stats st = depth_moments(p, t, valid, R);
-  const float m = n < first || st.n < 2.0f ? 0.0f : valid[r] * mask[nr];
+  const float3 fit = fs_fit(p, t, valid, mask, R);
+  const float m = n < first || fit.z < 2.0f ? 0.0f : valid[r] * mask[nr];
   if (m == 0.0f) {
     partial[nr] = 0.0f;
     return;
   }
-  const float zt = st.mp + st.sp / st.st * (t[r] - st.mt) - margin;
+  const float zt = fit.x + fit.y * t[r] - margin;
   float T = 1.0f, L = 0.0f;
   for (uint i = 0; i < S; ++i) {
     const size_t e = (size_t)n * R * S + (size_t)r * S + i;
@@ -131,9 +156,9 @@ __kernel void free_space_backward(__global const float* raw, __global const floa
   if (nr >= N * R) return;
   if (clear_dp && nr < R) dp[nr] = 0.0f;
   const uint n = nr / R, r = nr % R;
-  const depth_stats st = depth_moments(p, t, valid, R);
-  const float coef = n < first || st.n < 2.0f ? 0.0f : gloss[0] * scale * valid[r] * mask[nr];
-  const float zt = st.mp + st.sp / st.st * (t[r] - st.mt) - margin;
+  const float3 fit = fs_fit(p, t, valid, mask, R);
+  const float coef = n < first || fit.z < 2.0f ? 0.0f : gloss[0] * scale * valid[r] * mask[nr];
+  const float zt = fit.x + fit.y * t[r] - margin;
   const size_t first_e = (size_t)n * R * S + (size_t)r * S;
   __global float* ts = work + first_e;
   float T = 1.0f;

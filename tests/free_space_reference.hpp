@@ -14,22 +14,26 @@ struct FreeSpaceCase {
 };
 
 inline double free_space_reference(const FreeSpaceCase& f, const std::vector<float>& raw) {
+  // Least-squares fit depth ~ a + b target over the valid background rays (masks row 0).
   double n = 0, sp = 0, st = 0;
-  for (size_t r = 0; r < f.R; ++r) n += f.valid[r], sp += f.valid[r] * f.depth[r], st += f.valid[r] * f.target[r];
+  for (size_t r = 0; r < f.R; ++r) {
+    const double w = f.valid[r] * f.masks[r];
+    n += w, sp += w * f.depth[r], st += w * f.target[r];
+  }
   if (n < 2) return 0;
   const double mp = sp / n, mt = st / n;
-  double vp = 0, vt = 0;
+  double cov = 0, vt = 0;
   for (size_t r = 0; r < f.R; ++r) {
-    vp += f.valid[r] * (f.depth[r] - mp) * (f.depth[r] - mp);
-    vt += f.valid[r] * (f.target[r] - mt) * (f.target[r] - mt);
+    const double w = f.valid[r] * f.masks[r];
+    cov += w * (f.depth[r] - mp) * (f.target[r] - mt), vt += w * (f.target[r] - mt) * (f.target[r] - mt);
   }
-  const double sdp = std::sqrt(vp / n + 1e-6), sdt = std::sqrt(vt / n + 1e-6);
+  const double b = cov / (vt + 1e-6 * n), a = mp - b * mt;
   double sum = 0;
   for (size_t k = f.first; k < f.N; ++k)
     for (size_t r = 0; r < f.R; ++r) {
       const double m = f.valid[r] * f.masks[k * f.R + r];
       if (m == 0) continue;
-      const double zt = mp + sdp / sdt * (f.target[r] - mt) - f.margin;
+      const double zt = a + b * f.target[r] - f.margin;
       double T = 1, L = 0;
       for (size_t i = 0; i < f.S; ++i) {
         const size_t e = (k * f.R + r) * f.S + i;

@@ -52,12 +52,12 @@ Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Te
 // Free-space loss (kernels/depth_loss.cl): the weight each NeRF n >= first_nerf puts more than
 // `margin` in front of the depth the disparity gives, on the rays of its mask, weighted by the
 // distance: mean over NeRFs n and rays r of valid_r mask_n(r) sum_i w_i max(0, z*_r - margin
-// - z_i), w = T alpha its own sample weights. The target z*_r = mean(depth) + std(depth) /
-// std(target) (target_r - mean(target)), moments over the valid rays: the disparity mapped
-// to the rendered depth's units as depth_loss standardises them (a constant: depth gets no
-// gradient). It empties the space in front of an object seen from one camera per time, which
-// the depth loss on the expected depth misses. raw, delta, z, masks, noise as
-// distortion_loss; depth, target, valid [R] as depth_loss.
+// - z_i), w = T alpha its own sample weights. The target z*_r = a + b target_r, (a, b) the
+// least-squares fit of depth on target over the valid background rays (masks row 0), where
+// the pretrained static NeRF's depth can be trusted: the disparity in the rendered depth's
+// units (a constant: depth gets no gradient). It empties the space in front of an object seen
+// from one camera per time, which the depth loss on the expected depth misses. raw, delta, z,
+// masks, noise as distortion_loss; depth, target, valid [R] as depth_loss.
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise = {}, float margin = 0.05f,
                        size_t first_nerf = 1);
