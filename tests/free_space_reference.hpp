@@ -1,8 +1,13 @@
 #pragma once
-// Float64 reference of the free-space loss (include/nova/losses.hpp, kernels/depth_loss.cl).
+// Float64 reference of the free-space loss (include/nova/losses.hpp, kernels/depth_loss.cl),
+// its central differences, and one device run of the op on the same case.
 #include <algorithm>
 #include <cmath>
 #include <vector>
+
+#include "nova/executor.hpp"
+#include "nova/losses.hpp"
+#include "nova/ops.hpp"
 
 namespace nova::test {
 
@@ -46,6 +51,62 @@ inline double free_space_reference(const FreeSpaceCase& f, const std::vector<flo
       sum += m * L;
     }
   return sum / double((f.N - f.first) * f.R);
+}
+
+// d loss / d raw by central differences of the reference in the sigma channel (0 elsewhere).
+inline std::vector<double> free_space_sigma_fd(const FreeSpaceCase& f, float h) {
+  std::vector<double> fd(f.raw.size(), 0.0);
+  std::vector<float> x = f.raw;
+  for (size_t e = 0; e < f.N * f.R * f.S; ++e) {
+    const size_t i = e * f.C + 3;
+    const float x0 = x[i];
+    x[i] = x0 + h;
+    const double lp = free_space_reference(f, x);
+    x[i] = x0 - h;
+    const double lm = free_space_reference(f, x);
+    x[i] = x0;
+    fd[i] = (lp - lm) / (double(x0 + h) - double(x0 - h));
+  }
+  return fd;
+}
+
+struct FreeSpaceRun {
+  float loss;
+  std::vector<float> d_raw, d_depth;
+};
+
+// One forward and backward of free_space_loss on the case. With `depth_also_in_mse` the depth
+// also feeds an mse built before the op, so the op is the first writer of the depth's
+// gradient in backward order and must clear it.
+inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool depth_also_in_mse = false) {
+  Graph g;
+  const size_t N = f.N, R = f.R, S = f.S;
+  Tensor raw = g.input("raw", Shape{N, R * S, f.C}, true);
+  Tensor delta = g.input("delta", f.per_nerf_delta ? Shape{N, R, S} : Shape{R, S});
+  Tensor z = g.input("z", Shape{R, S});
+  Tensor depth = g.input("depth", Shape{R}, depth_also_in_mse);
+  Tensor target = g.input("target", Shape{R}), valid = g.input("valid", Shape{R});
+  Tensor masks = g.input("masks", Shape{N, R});
+  Tensor noise = f.noise.empty() ? Tensor{} : g.input("noise", Shape{N, R * S});
+  Tensor zero = g.input("zero", Shape{R});
+  Tensor depth_mse = depth_also_in_mse ? mse(depth, zero) : Tensor{};
+  Tensor fs = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, f.first);
+  g.keep(fs);
+  g.set_loss(depth_also_in_mse ? weighted_sum({depth_mse, fs}, {1.0f, 1.0f}) : fs);
+  Executor ex(rt, g);
+  ex.set(raw, f.raw);
+  ex.set(delta, f.delta);
+  ex.set(z, f.z);
+  ex.set(depth, f.depth);
+  ex.set(target, f.target);
+  ex.set(valid, f.valid);
+  ex.set(masks, f.masks);
+  if (noise.valid()) ex.set(noise, f.noise);
+  ex.set(zero, std::vector<float>(R, 0.0f));
+  ex.forward();
+  ex.backward();
+  return {ex.get(fs).at(0), ex.get_grad(raw),
+          depth_also_in_mse ? ex.get_grad(depth) : std::vector<float>{}};
 }
 
 }  // namespace nova::test

@@ -42,42 +42,8 @@ FreeSpaceCase make_case(size_t N, size_t R, size_t S, bool noise, unsigned seed)
   return f;
 }
 
-struct DeviceResult {
-  float loss;
-  std::vector<float> d_raw, d_depth;
-};
-
-// With `depth_also_in_mse`, the depth also feeds a later mse, so the free-space op writes its
-// gradient first (backward order) and must clear it.
-DeviceResult run_device(const FreeSpaceCase& f, bool depth_also_in_mse = false) {
-  Graph g;
-  const size_t N = f.N, R = f.R, S = f.S;
-  Tensor raw = g.input("raw", Shape{N, R * S, f.C}, true);
-  Tensor delta = g.input("delta", f.per_nerf_delta ? Shape{N, R, S} : Shape{R, S});
-  Tensor z = g.input("z", Shape{R, S});
-  Tensor depth = g.input("depth", Shape{R}, depth_also_in_mse);
-  Tensor target = g.input("target", Shape{R}), valid = g.input("valid", Shape{R});
-  Tensor masks = g.input("masks", Shape{N, R});
-  Tensor noise = f.noise.empty() ? Tensor{} : g.input("noise", Shape{N, R * S});
-  Tensor zero = g.input("zero", Shape{R});
-  // The mse comes first in forward order, so the free-space op is first in backward order.
-  Tensor depth_mse = depth_also_in_mse ? mse(depth, zero) : Tensor{};
-  Tensor fs = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, f.first);
-  g.keep(fs);
-  g.set_loss(depth_also_in_mse ? weighted_sum({depth_mse, fs}, {1.0f, 1.0f}) : fs);
-  Executor ex(test::runtime(), g);
-  ex.set(raw, f.raw);
-  ex.set(delta, f.delta);
-  ex.set(z, f.z);
-  ex.set(depth, f.depth);
-  ex.set(target, f.target);
-  ex.set(valid, f.valid);
-  ex.set(masks, f.masks);
-  if (noise.valid()) ex.set(noise, f.noise);
-  ex.set(zero, std::vector<float>(R, 0.0f));
-  ex.forward();
-  ex.backward();
-  return {ex.get(fs).at(0), ex.get_grad(raw), depth_also_in_mse ? ex.get_grad(depth) : std::vector<float>{}};
+FreeSpaceRun run_device(const FreeSpaceCase& f, bool depth_also_in_mse = false) {
+  return run_free_space(f, test::runtime(), depth_also_in_mse);
 }
 
 }  // namespace
@@ -87,23 +53,11 @@ BOOST_AUTO_TEST_SUITE(free_space_loss_op)
 BOOST_AUTO_TEST_CASE(forward_and_gradient_match_reference) {
   for (bool noise : {false, true}) {
     const FreeSpaceCase f = make_case(3, 37, 11, noise, noise ? 20 : 10);
-    const DeviceResult d = run_device(f);
+    const FreeSpaceRun d = run_device(f);
     const double ref = free_space_reference(f, f.raw);
     BOOST_TEST(ref > 1e-3);  // the case has weight in front of its targets
     expect_close({d.loss}, {ref}, 0, 1e-4, "free_space_loss");
-    std::vector<double> fd(f.raw.size(), 0.0);
-    std::vector<float> x = f.raw;
-    for (size_t e = 0; e < f.N * f.R * f.S; ++e) {
-      const size_t i = e * f.C + 3;
-      const float x0 = x[i];
-      const double h = 1e-4;
-      x[i] = x0 + static_cast<float>(h);
-      const double lp = free_space_reference(f, x);
-      x[i] = x0 - static_cast<float>(h);
-      const double lm = free_space_reference(f, x);
-      x[i] = x0;
-      fd[i] = (lp - lm) / (double(x0 + float(h)) - double(x0 - float(h)));
-    }
+    const std::vector<double> fd = free_space_sigma_fd(f, 1e-4f);
     double scale = 0;
     for (double v : fd) scale = std::max(scale, std::abs(v));
     expect_close(d.d_raw, fd, 1e-5 * scale, 1e-3, noise ? "d raw (noise)" : "d raw");
@@ -112,7 +66,7 @@ BOOST_AUTO_TEST_CASE(forward_and_gradient_match_reference) {
 
 BOOST_AUTO_TEST_CASE(depth_gets_no_gradient) {
   const FreeSpaceCase f = make_case(3, 17, 7, false, 30);
-  const DeviceResult d = run_device(f, true);
+  const FreeSpaceRun d = run_device(f, true);
   std::vector<double> ref(f.R);
   for (size_t r = 0; r < f.R; ++r) ref[r] = 2.0 * f.depth[r] / double(f.R);  // mse(depth, 0) alone
   expect_close(d.d_depth, ref, 1e-7, 1e-5, "d depth");
@@ -136,7 +90,7 @@ BOOST_AUTO_TEST_CASE(haze_in_front_costs_a_surface_does_not) {
   // Ray 0 of the object: opaque at z = 0.6 (sample 12). Ray 1: the same opacity at z = 0.3.
   f.raw[((1 * f.R + 0) * f.S + 12) * f.C + 3] = 200.0f;
   f.raw[((1 * f.R + 1) * f.S + 6) * f.C + 3] = 200.0f;
-  const DeviceResult d = run_device(f);
+  const FreeSpaceRun d = run_device(f);
   // Ray 1's weight ~1 sits 0.6 - 0.05 - 0.3 = 0.25 in front: loss 0.25 / (1 x 2 rays).
   BOOST_TEST(d.loss == 0.125, boost::test_tools::tolerance(1e-3));
   f.raw[((1 * f.R + 1) * f.S + 6) * f.C + 3] = 0.0f;

@@ -596,36 +596,10 @@ BOOST_AUTO_TEST_CASE(depth_loss_kernels) {
   f.valid = w;
   f.masks = random_floats(f.N * kRows, 0, 1, 185);
   for (float& m : f.masks) m = m < 0.3f ? 0.0f : 1.0f;
-  Graph fg;
-  Tensor fraw = fg.input("raw", Shape{f.N, kRows * f.S, f.C}, true);
-  Tensor fdelta = fg.input("delta", Shape{f.N, kRows, f.S}), fz = fg.input("z", Shape{kRows, f.S});
-  Tensor fp = fg.input("depth", s), ft = fg.input("target", s), fw = fg.input("valid", s);
-  Tensor fm = fg.input("masks", Shape{f.N, kRows});
-  fg.set_loss(free_space_loss(fraw, fdelta, fz, fp, ft, fw, fm, Tensor{}, f.margin, f.first));
-  Executor fex(rt(), fg);
-  fex.set(fraw, f.raw);
-  fex.set(fdelta, f.delta);
-  fex.set(fz, f.z);
-  fex.set(fp, f.depth);
-  fex.set(ft, f.target);
-  fex.set(fw, f.valid);
-  fex.set(fm, f.masks);
-  fex.forward();
-  fex.backward();
-  expect_close({fex.loss()}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss");
-  std::vector<double> ffd(f.raw.size(), 0.0);
-  std::vector<float> x = f.raw;
-  for (size_t e = 0; e < f.N * kRows * f.S; ++e) {
-    const size_t i = e * f.C + 3;
-    const float x0 = x[i];
-    x[i] = x0 + 1e-3f;
-    const double lp = free_space_reference(f, x);
-    x[i] = x0 - 1e-3f;
-    const double lm = free_space_reference(f, x);
-    x[i] = x0;
-    ffd[i] = (lp - lm) / (double(x0 + 1e-3f) - double(x0 - 1e-3f));
-  }
-  expect_close(fex.get_grad(fraw), ffd, 1e-5 * max_abs(ffd), 1e-3, "d free_space_loss / d raw");
+  const FreeSpaceRun run = run_free_space(f, rt());
+  expect_close({run.loss}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss");
+  const std::vector<double> ffd = free_space_sigma_fd(f, 1e-3f);
+  expect_close(run.d_raw, ffd, 1e-5 * max_abs(ffd), 1e-3, "d free_space_loss / d raw");
 }
 
 // The sweep above covers every kernel of every embedded family (parsed from the sources).

@@ -2,36 +2,29 @@
 #include "nova/executor.hpp"
 #include "nova/losses.hpp"
 #include "nova/render.hpp"
-#include "op_util.hpp"
+#include "ray_sample_layout.hpp"
 
 namespace nova {
 namespace {
 
 class DistortionLossOp final : public Op {
  public:
-  DistortionLossOp(size_t nerfs, size_t rays, size_t samples, size_t channels,
-                   bool per_nerf_delta, bool noise, bool mask, size_t first)
-      : nerfs_(nerfs), rays_(rays), samples_(samples), channels_(channels),
-        per_nerf_delta_(per_nerf_delta), noise_(noise), mask_(mask), first_(first) {}
+  DistortionLossOp(detail::RaySampleLayout l, bool noise, bool mask) : l_(l), noise_(noise), mask_(mask) {}
   std::string type() const override { return "distortion_loss"; }
 
   // Inputs: raw, delta, z[, masks][, noise]. Absent ones are passed as raw (never read).
   cl_mem mask(ExecContext& ctx) const { return mask_ ? ctx.in(3) : ctx.in(0); }
   cl_mem noise(ExecContext& ctx) const { return noise_ ? ctx.in(mask_ ? 4 : 3) : ctx.in(0); }
-  unsigned delta_stride() const {
-    return per_nerf_delta_ ? detail::u32(rays_ * samples_, "rays x samples") : 0u;
-  }
-  size_t pairs() const { return nerfs_ * rays_; }
 
   void forward(ExecContext& ctx) override {
     ctx.launch("distortion", "distortion_partial")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(noise(ctx)).arg(mask(ctx))
-        .arg(ctx.workspace()).arg(detail::u32(nerfs_, "nerfs")).arg(detail::u32(rays_, "rays"))
-        .arg(detail::u32(samples_, "samples")).arg(detail::u32(channels_, "channels"))
-        .arg(delta_stride()).arg(static_cast<int>(noise_)).arg(static_cast<int>(mask_))
-        .arg(detail::u32(first_, "first NeRF")).run(pairs());
+        .arg(ctx.workspace()).arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
+        .arg(detail::u32(l_.samples, "samples")).arg(detail::u32(l_.channels, "channels"))
+        .arg(l_.delta_stride()).arg(static_cast<int>(noise_)).arg(static_cast<int>(mask_))
+        .arg(detail::u32(l_.first, "first NeRF")).run(l_.pairs());
     ctx.launch("loss", "sum_finish").arg(ctx.workspace()).arg(ctx.out(0))
-        .arg(detail::u32(pairs(), "nerfs x rays")).arg(scale()).run(1);
+        .arg(detail::u32(l_.pairs(), "nerfs x rays")).arg(l_.pair_scale()).run(1);
   }
 
   void backward(ExecContext& ctx) override {
@@ -39,62 +32,42 @@ class DistortionLossOp final : public Op {
     if (!gl || !g) return;
     ctx.launch("distortion", "distortion_backward")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(noise(ctx)).arg(mask(ctx)).arg(gl)
-        .arg(ctx.workspace()).arg(g).arg(detail::u32(nerfs_, "nerfs"))
-        .arg(detail::u32(rays_, "rays")).arg(detail::u32(samples_, "samples"))
-        .arg(detail::u32(channels_, "channels")).arg(delta_stride())
+        .arg(ctx.workspace()).arg(g).arg(detail::u32(l_.nerfs, "nerfs"))
+        .arg(detail::u32(l_.rays, "rays")).arg(detail::u32(l_.samples, "samples"))
+        .arg(detail::u32(l_.channels, "channels")).arg(l_.delta_stride())
         .arg(static_cast<int>(noise_)).arg(static_cast<int>(mask_))
-        .arg(detail::u32(first_, "first NeRF")).arg(scale())
+        .arg(detail::u32(l_.first, "first NeRF")).arg(l_.pair_scale())
         .arg(static_cast<int>(ctx.accumulate_in(0)))
-        .run(pairs());
+        .run(l_.pairs());
   }
 
   std::vector<TensorId> saved_for_backward() const override { return inputs(); }
   size_t workspace_bytes(Runtime&, Pass pass) const override {
-    return (pass == Pass::Forward ? pairs() : 2 * pairs() * samples_) * sizeof(float);
+    return (pass == Pass::Forward ? l_.pairs() : 2 * l_.pairs() * l_.samples) * sizeof(float);
   }
 
  private:
-  // The mean over the (NeRF, ray) pairs taking part.
-  float scale() const { return 1.0f / static_cast<float>((nerfs_ - first_) * rays_); }
-
-  size_t nerfs_, rays_, samples_, channels_;
-  bool per_nerf_delta_, noise_, mask_;
-  size_t first_;
+  detail::RaySampleLayout l_;
+  bool noise_, mask_;
 };
-
-[[noreturn]] void bad(const std::string& what) {
-  throw Error("distortion_loss: " + what, kExitInternal);
-}
 
 }  // namespace
 
 Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks, Tensor noise,
                        size_t first_nerf) {
-  const auto d = detail::as_batched(raw.shape(), "distortion_loss");
-  if (first_nerf >= d.batch)
-    bad("first NeRF " + std::to_string(first_nerf) + " leaves none of raw's " + std::to_string(d.batch));
-  if (d.cols < static_cast<size_t>(kRawChannels))
-    bad("raw needs at least 5 channels, got " + raw.shape().str());
-  const Shape& zs = z.shape();
-  if (zs.rank() != 2 || zs[0] * zs[1] != d.rows) bad("z must be [R, S] of raw's rows, got " + zs.str());
-  const size_t rays = zs[0], samples = zs[1];
-  const size_t dn = delta.shape().numel();
-  if (dn != d.rows && dn != d.batch * d.rows) bad("delta " + delta.shape().str() + " does not fit raw");
-  if (masks.valid() && !(masks.shape() == Shape{d.batch, rays}))
-    bad("masks must be [" + std::to_string(d.batch) + ", " + std::to_string(rays) + "], got " +
-        masks.shape().str());
-  if (noise.valid() && noise.shape().numel() != d.batch * d.rows)
-    bad("noise " + noise.shape().str() + " does not fit raw");
-  for (const Tensor& t : {delta, z, masks, noise})
-    if (t.valid() && t.info().requires_grad) bad(t.info().name + " is data and cannot take a gradient");
+  const auto l = detail::ray_sample_layout("distortion_loss", raw, delta, z, noise, first_nerf);
+  if (masks.valid() && !(masks.shape() == Shape{l.nerfs, l.rays}))
+    throw Error("distortion_loss: masks must be [" + std::to_string(l.nerfs) + ", " +
+                    std::to_string(l.rays) + "], got " + masks.shape().str(),
+                kExitInternal);
+  if (masks.valid() && masks.info().requires_grad)
+    throw Error("distortion_loss: masks are data and cannot take a gradient", kExitInternal);
   Graph& g = *raw.graph;
   Tensor y = g.activation(raw.info().name + ".distortion_loss", Shape{1});
   std::vector<Tensor> inputs = {raw, delta, z};
   if (masks.valid()) inputs.push_back(masks);
   if (noise.valid()) inputs.push_back(noise);
-  g.add(std::make_unique<DistortionLossOp>(d.batch, rays, samples, d.cols, dn != d.rows,
-                                           noise.valid(), masks.valid(), first_nerf),
-        inputs, {y});
+  g.add(std::make_unique<DistortionLossOp>(l, noise.valid(), masks.valid()), inputs, {y});
   return y;
 }
 
