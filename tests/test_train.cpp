@@ -188,6 +188,13 @@ const GridRun& grid_run() {
     c.occupancy_warmup = 50;
     c.occupancy_every = 16;
     c.occupancy_alpha = 0.1f;
+    // These cases measure skipping and termination against the unskipped render of one model;
+    // quick's two object priors make this 250-step model one where they cost more (skipped
+    // against full: 25.8 dB; the static NeRF behind the objects keeps the haze of its
+    // initialisation, which objects still half transparent let through and the grids drop),
+    // so the model is trained without them (README, "Known issues").
+    c.static_background_only = false;
+    c.w_free_space = 0.0f;
     Trainer t(runtime(), g.scene, c, (dir / "run").string());
     t.run([&](const TrainProgress& p) { g.kept = p.kept; });
     g.checkpoint = t.checkpoint();
