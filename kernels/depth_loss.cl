@@ -83,17 +83,22 @@ __kernel void depth_loss_backward(__global const float* p, __global const float*
 // 0), where the static NeRF, pretrained on such pixels, gives a depth to trust; on object
 // rays p is not (a hazy object renders a small p). A constant here: p gets no gradient. For
 // NeRF n >= first on ray r, with its own weights w_i = T_i alpha_i and
-// h_i = max(0, z*_r - margin - z_i):
+// h_i = max(0, z*_r - margin - z_i) (a, b from free_space_fit):
 //   partial[n R + r] = valid_r mask_n(r) sum_i w_i h_i.
 // Unlike the depth loss on the expected depth, this sees a haze in front of a surface even
 // where the expected depth is right, and unlike the distortion loss it sees a compact layer
 // at the wrong depth. Layout as kernels/distortion.cl (raw [N, R*S, C], sigma in channel 3).
 inline float fs_alpha(float s, float d) { return -expm1(-fmax(s, 0.0f) * d); }
 
-// (a, b, n) of the fit p ~ a + b t over the rays with valid[r] mask[r] (mask row 0); n < 2:
-// no fit. One work-item's fixed-order sums, like depth_moments.
-inline float3 fs_fit(__global const float* p, __global const float* t,
-                     __global const float* valid, __global const float* mask, uint R) {
+// work[at .. at + 3) = (a, b, n) of the least-squares fit p ~ a + b t over the rays with
+// valid[r] mask[r] (mask row 0); n < 2: no fit. Once per pass, one work-item's fixed-order
+// sums (as depth_moments), read by every (NeRF, ray) item of the pass: it follows the N R
+// partial sums in the forward's workspace and the N R S transmittances in the backward's.
+__kernel void free_space_fit(__global const float* p, __global const float* t,
+                             __global const float* valid, __global const float* mask,
+                             __global float* work, uint at, uint R) {
+  if (get_global_id(0) != 0) return;
+  __global float* fit = work + at;
   float n = 0.0f, sp = 0.0f, st = 0.0f;
   for (uint r = 0; r < R; ++r) {
     const float w = valid[r] * mask[r];
@@ -101,7 +106,10 @@ inline float3 fs_fit(__global const float* p, __global const float* t,
     sp += w * p[r];
     st += w * t[r];
   }
-  if (n < 2.0f) return (float3)(0.0f, 0.0f, n);
+  fit[0] = 0.0f;
+  fit[1] = 0.0f;
+  fit[2] = n;
+  if (n < 2.0f) return;
   const float mp = sp / n, mt = st / n;
   float cov = 0.0f, vt = 0.0f;
   for (uint r = 0; r < R; ++r) {
@@ -110,25 +118,26 @@ inline float3 fs_fit(__global const float* p, __global const float* t,
     vt += w * dt * dt;
   }
   const float b = cov / (vt + DEPTH_EPS * n);
-  return (float3)(mp - b * mt, b, n);
+  fit[0] = mp - b * mt;
+  fit[1] = b;
 }
 
 __kernel void free_space_partial(__global const float* raw, __global const float* delta,
-                                 __global const float* z, __global const float* p,
-                                 __global const float* t, __global const float* valid,
-                                 __global const float* mask, __global const float* noise,
-                                 __global float* partial, uint N, uint R, uint S, uint C,
-                                 uint delta_stride, int use_noise, uint first, float margin) {
+                                 __global const float* z, __global const float* t,
+                                 __global const float* valid, __global const float* mask,
+                                 __global const float* noise, __global float* partial, uint N,
+                                 uint R, uint S, uint C, uint delta_stride, int use_noise,
+                                 uint first, float margin) {
   const uint nr = get_global_id(0);
   if (nr >= N * R) return;
+  __global const float* fit = partial + N * R;
   const uint n = nr / R, r = nr % R;
-  const float3 fit = fs_fit(p, t, valid, mask, R);
-  const float m = n < first || fit.z < 2.0f ? 0.0f : valid[r] * mask[nr];
+  const float m = n < first || fit[2] < 2.0f ? 0.0f : valid[r] * mask[nr];
   if (m == 0.0f) {
     partial[nr] = 0.0f;
     return;
   }
-  const float zt = fit.x + fit.y * t[r] - margin;
+  const float zt = fit[0] + fit[1] * t[r] - margin;
   float T = 1.0f, L = 0.0f;
   for (uint i = 0; i < S; ++i) {
     const size_t e = (size_t)n * R * S + (size_t)r * S + i;
@@ -142,13 +151,13 @@ __kernel void free_space_partial(__global const float* raw, __global const float
 
 // d raw (sigma only): dL/dalpha_i = T_i (h_i - A_i), A_i = sum_{k>i} h_k alpha_k
 // prod_{i<j<k} (1 - alpha_j), walked backwards (A_{i-1} = h_i alpha_i + (1 - alpha_i) A_i);
-// `work` keeps the forward walk's T ([N*R*S]). Work-items nr < R also clear dp (the rendered
+// `work` keeps the forward walk's T ([N*R*S]), then the fit. Work-items nr < R also clear dp (the rendered
 // depth gets no gradient from this loss) when they are its first writer.
 __kernel void free_space_backward(__global const float* raw, __global const float* delta,
-                                  __global const float* z, __global const float* p,
-                                  __global const float* t, __global const float* valid,
-                                  __global const float* mask, __global const float* noise,
-                                  __global const float* gloss, __global float* work,
+                                  __global const float* z, __global const float* t,
+                                  __global const float* valid, __global const float* mask,
+                                  __global const float* noise, __global const float* gloss,
+                                  __global float* work,
                                   __global float* grad, __global float* dp, uint N, uint R,
                                   uint S, uint C, uint delta_stride, int use_noise, uint first,
                                   float margin, float scale, int accumulate, int clear_dp) {
@@ -156,9 +165,9 @@ __kernel void free_space_backward(__global const float* raw, __global const floa
   if (nr >= N * R) return;
   if (clear_dp && nr < R) dp[nr] = 0.0f;
   const uint n = nr / R, r = nr % R;
-  const float3 fit = fs_fit(p, t, valid, mask, R);
-  const float coef = n < first || fit.z < 2.0f ? 0.0f : gloss[0] * scale * valid[r] * mask[nr];
-  const float zt = fit.x + fit.y * t[r] - margin;
+  __global const float* fit = work + (size_t)N * R * S;
+  const float coef = n < first || fit[2] < 2.0f ? 0.0f : gloss[0] * scale * valid[r] * mask[nr];
+  const float zt = fit[0] + fit[1] * t[r] - margin;
   const size_t first_e = (size_t)n * R * S + (size_t)r * S;
   __global float* ts = work + first_e;
   float T = 1.0f;

@@ -1,7 +1,5 @@
 // The free-space loss (kernels/depth_loss.cl): weight in front of the surface the disparity
 // puts on each ray.
-#include <algorithm>
-
 #include "nova/executor.hpp"
 #include "nova/losses.hpp"
 #include "ray_sample_layout.hpp"
@@ -17,9 +15,10 @@ class FreeSpaceLossOp final : public Op {
   std::string type() const override { return "free_space_loss"; }
 
   void forward(ExecContext& ctx) override {
+    fit_disparity(ctx, l_.pairs());
     ctx.launch("depth_loss", "free_space_partial")
-        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.in(3)).arg(ctx.in(4))
-        .arg(ctx.in(5)).arg(ctx.in(6)).arg(noise(ctx)).arg(ctx.workspace())
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.in(4)).arg(ctx.in(5))
+        .arg(ctx.in(6)).arg(noise(ctx)).arg(ctx.workspace())
         .arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
         .arg(detail::u32(l_.samples, "samples")).arg(detail::u32(l_.channels, "channels"))
         .arg(l_.delta_stride()).arg(static_cast<int>(noise_)).arg(detail::u32(l_.first, "first NeRF"))
@@ -35,23 +34,35 @@ class FreeSpaceLossOp final : public Op {
     // other consumers and this op writes it first, it must be cleared.
     cl_mem dp = ctx.grad_in(3);
     const bool clear_dp = dp && !ctx.accumulate_in(3);
+    fit_disparity(ctx, l_.pairs() * l_.samples);
     ctx.launch("depth_loss", "free_space_backward")
-        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.in(3)).arg(ctx.in(4))
-        .arg(ctx.in(5)).arg(ctx.in(6)).arg(noise(ctx)).arg(gl).arg(ctx.workspace()).arg(g)
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.in(4)).arg(ctx.in(5))
+        .arg(ctx.in(6)).arg(noise(ctx)).arg(gl).arg(ctx.workspace()).arg(g)
         .arg(dp ? dp : g).arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
         .arg(detail::u32(l_.samples, "samples")).arg(detail::u32(l_.channels, "channels"))
         .arg(l_.delta_stride()).arg(static_cast<int>(noise_)).arg(detail::u32(l_.first, "first NeRF"))
         .arg(margin_).arg(l_.pair_scale()).arg(static_cast<int>(ctx.accumulate_in(0)))
-        .arg(static_cast<int>(clear_dp)).run(std::max(l_.pairs(), l_.rays));
+        .arg(static_cast<int>(clear_dp)).run(l_.pairs());
   }
 
   std::vector<TensorId> saved_for_backward() const override { return inputs(); }
+  // Forward: the partial sums, then the fit; backward: the walk's T, then the fit.
   size_t workspace_bytes(Runtime&, Pass pass) const override {
-    return (pass == Pass::Forward ? l_.pairs() : l_.pairs() * l_.samples) * sizeof(float);
+    return ((pass == Pass::Forward ? l_.pairs() : l_.pairs() * l_.samples) + kFitFloats) * sizeof(float);
   }
 
  private:
+  static constexpr size_t kFitFloats = 3;  // (a, b, n) of free_space_fit
+
   cl_mem noise(ExecContext& ctx) const { return noise_ ? ctx.in(7) : ctx.in(0); }
+
+  // The disparity-to-depth fit of this pass, written after the first `at` floats of the
+  // workspace (where the pass's kernel reads it).
+  void fit_disparity(ExecContext& ctx, size_t at) const {
+    ctx.launch("depth_loss", "free_space_fit")
+        .arg(ctx.in(3)).arg(ctx.in(4)).arg(ctx.in(5)).arg(ctx.in(6)).arg(ctx.workspace())
+        .arg(detail::u32(at, "free-space workspace")).arg(detail::u32(l_.rays, "rays")).run(1);
+  }
 
   detail::RaySampleLayout l_;
   bool noise_;
