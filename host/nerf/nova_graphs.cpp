@@ -80,8 +80,10 @@ RayGeometry ray_geometry(const Scene& scene) {
 }
 
 bool depth_term_active(const TrainConfig& c, const RayGeometry& g) {
-  return (c.w_depth > 0.0f || c.w_free_space > 0.0f) && g.disparity && g.ndc;
+  return c.w_depth > 0.0f && disparity_usable(g);
 }
+
+bool disparity_usable(const RayGeometry& g) { return g.disparity && g.ndc; }
 
 namespace {
 
@@ -96,7 +98,7 @@ void add_depth_inputs(StepGraph& s, const TrainConfig& c) {
 // Adds w_depth * depth_loss(depth, -disparity) to `loss` when the scene supports it.
 Tensor with_depth_term(StepGraph& s, const TrainConfig& c, const RayGeometry& geo, Tensor depth,
                        Tensor loss) {
-  if (!depth_term_active(c, geo) || c.w_depth <= 0.0f) return loss;
+  if (!depth_term_active(c, geo)) return loss;
   add_depth_inputs(s, c);
   Tensor d = depth_loss(depth, s.target_depth, s.depth_valid);
   s.terms.emplace_back("depth", d);
@@ -107,7 +109,7 @@ Tensor with_depth_term(StepGraph& s, const TrainConfig& c, const RayGeometry& ge
 // training, scenes with disparity in NDC).
 Tensor with_free_space_term(StepGraph& s, const TrainConfig& c, const RayGeometry& geo,
                             Tensor raw, const Samples& smp, Tensor depth, Tensor loss) {
-  if (!depth_term_active(c, geo) || c.w_free_space <= 0.0f) return loss;
+  if (c.w_free_space <= 0.0f || !disparity_usable(geo)) return loss;
   add_depth_inputs(s, c);
   Tensor f = free_space_loss(raw, smp.delta, smp.z, depth, s.target_depth, s.depth_valid,
                              s.target_masks, s.noise, c.free_space_margin, 1);

@@ -37,8 +37,8 @@ struct StepGraph {
   int nerfs = 1;  // 1 (pretraining) or 1 + K
   // Data inputs, set every step (invalid when the graph has none).
   Tensor pixels, cameras, jitter, noise, times, target_rgb, target_masks;
-  // The depth term (when built, see depth_term_active): minus the disparity per ray, and
-  // 1 where it applies (0 on augmented steps, whose warped views have no disparity).
+  // The targets of the depth and free-space terms (when either is built): minus the disparity
+  // per ray, and 1 where it applies (0 on augmented steps, whose warped views have no disparity).
   Tensor target_depth, depth_valid;
   Tensor loss;
   std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
@@ -48,8 +48,10 @@ struct StepGraph {
   std::shared_ptr<PackSelect> pack_static, pack_objects;
 };
 
-// Whether the graphs get the depth loss: a weight, disparity maps, and NDC rays (where the
-// rendered depth is affine in disparity; metric depth is not).
+// Whether the scene's disparity can supervise depth: every frame has a map, and rays are NDC
+// (where the rendered depth is affine in disparity; metric depth is not).
+bool disparity_usable(const RayGeometry& g);
+// Whether the graphs get the depth loss: a weight and usable disparity.
 bool depth_term_active(const TrainConfig& c, const RayGeometry& g);
 
 // The static NeRF alone on `rays` rays (background pixels): mse of its colour.
