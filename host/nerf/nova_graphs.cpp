@@ -50,6 +50,22 @@ std::vector<int> object_grids(int objects) {
   return v;
 }
 
+// 2 / the smallest gap between distinct frame times (frame i of N sits at 2 i / N - 1), so
+// a scene with every k-th frame held out still counts N as long as two neighbours remain.
+int time_axis_frames(const Scene& scene) {
+  if (!scene.has_time) return 0;
+  std::vector<double> t;
+  for (const Frame& f : scene.frames) t.push_back(f.time);
+  std::sort(t.begin(), t.end());
+  double gap = 0;
+  for (size_t i = 1; i < t.size(); ++i) {
+    const double d = t[i] - t[i - 1];
+    if (d > 1e-9 && (gap == 0 || d < gap)) gap = d;
+  }
+  if (gap == 0) return 0;
+  return static_cast<int>(std::lround(std::min(2.0 / gap, 1e6)));
+}
+
 }  // namespace
 
 RayGeometry ray_geometry(const Scene& scene) {
@@ -59,6 +75,7 @@ RayGeometry ray_geometry(const Scene& scene) {
   g.num_objects = scene.num_objects;
   g.disparity = std::all_of(scene.frames.begin(), scene.frames.end(),
                             [](const Frame& f) { return !f.disparity.empty(); });
+  g.frames = time_axis_frames(scene);
   if (scene.ndc) {
     const Camera& c = scene.frames.front().camera;
     g.near = 0.0f;
@@ -133,6 +150,11 @@ Tensor with_distortion_term(StepGraph& s, const TrainConfig& c, Tensor raw, cons
 FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g) {
   FieldConfig out = f;
   if (out.hash.bound <= 0.0f) out.hash.bound = g.extent;
+  if (out.hash_time_auto) {
+    out.hash.time_max_resolution =
+        g.frames > 0 ? std::max(1, static_cast<int>(std::lround(g.frames / kFramesPerTimeCell))) : 0;
+    out.hash_time_auto = false;
+  }
   return out;
 }
 

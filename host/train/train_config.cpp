@@ -122,8 +122,15 @@ std::vector<ConfigOption> make_options() {
                          [](TrainConfig& c) -> int& { return c.field.hash.min_resolution; }));
   o.push_back(int_option("hash-max-res", "hash grid: cells per dimension of the finest level", 1, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.field.hash.max_resolution; }));
-  o.push_back(int_option("hash-time-res", "hash grid of the object NeRFs: most cells along time per level (time spans [-1, 1]; 0: as space)",
-                         0, 1 << 20, [](TrainConfig& c) -> int& { return c.field.hash.time_max_resolution; }));
+  o.push_back({"hash-time-res", "hash grid of the object NeRFs: most cells along time per level (time spans [-1, 1]): auto (about 3 frames per cell), 0 (as space) or a count",
+               [](const TrainConfig& c) {
+                 return c.field.hash_time_auto ? std::string("auto") : std::to_string(c.field.hash.time_max_resolution);
+               },
+               [](TrainConfig& c, const std::string& v) {
+                 c.field.hash_time_auto = trim(v) == "auto";
+                 if (!c.field.hash_time_auto)
+                   c.field.hash.time_max_resolution = static_cast<int>(parse_int("hash-time-res", v, 0, 1 << 20));
+               }});
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: 1 in NDC, else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,
@@ -230,6 +237,7 @@ TrainConfig preset_config(const std::string& name) {
   // Object pixels teach the static NeRF nothing, so it does not keep the objects' colours
   // along their paths (ghosts behind every moved or removed instance).
   c.static_background_only = true;
+  c.field.hash_time_auto = true;
   c.augment_start = 200;
   // A cell counts as empty under alpha 0.1 over its width: on the default synthetic scene
   // this drops the static NeRF's low-density haze (which 0.01 keeps) and two thirds of the

@@ -26,10 +26,14 @@ struct RayGeometry {
   float extent = 1.0f;
   int num_objects = 0;
   bool disparity = false;  // every training frame has a disparity map
+  // Frames the time axis [-1, 1] is divided into: 2 / the smallest gap between two frame
+  // times, so holding frames out does not change it (0: a static scene or a single frame).
+  int frames = 0;
 };
 RayGeometry ray_geometry(const Scene& scene);
 
-// The field configuration with what depends on the scene filled in (the hash grid's box).
+// The field configuration with what depends on the scene filled in: the hash grid's box and,
+// with hash_time_auto, its cells along time (frames / kFramesPerTimeCell, at least 1).
 FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g);
 
 struct StepGraph {
