@@ -47,6 +47,11 @@ float parse_float(const std::string& key, const std::string& text, double lo, do
   std::ostringstream range;
   range << "is out of range [" << lo << ", " << hi << "]";
   if (x < lo || x > hi) bad_value(key, text, range.str());
+  // Read straight to float where the syntax allows (no leading '+'): rounding through double
+  // could move a shortest-form value written by fmt() to the neighbouring float.
+  float f = 0;
+  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), f);
+  if (ec == std::errc() && end == v.data() + v.size()) return f;
   return static_cast<float>(x);
 }
 
@@ -57,11 +62,12 @@ bool parse_bool(const std::string& key, const std::string& text) {
   bad_value(key, text, "is not a boolean (true/false, on/off, 1/0)");
 }
 
+// The shortest text that reads back as the same float: config.ini must restore a run exactly
+// (resume) and read as typed (0.05, not 0.0500000007).
 std::string fmt(float x) {
-  std::ostringstream s;
-  s.precision(std::numeric_limits<float>::max_digits10);
-  s << x;
-  return s.str();
+  char buf[64];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
+  return ec == std::errc() ? std::string(buf, end) : std::to_string(x);
 }
 
 // Table builders: a member (reached through `field`) and its admissible range.
