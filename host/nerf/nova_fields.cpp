@@ -23,12 +23,19 @@ MlpConfig trunk_config(const FieldConfig& c, int outputs, int networks) {
 }
 
 // The encoded input of a trunk: positional encoding, or the hash grid `table_name`.
-Tensor encode(Tensor x, const FieldConfig& c, const std::string& table_name, int networks) {
+Tensor encode(Tensor x, const FieldConfig& c, const HashGridConfig& hash, const std::string& table_name,
+              int networks) {
   if (c.encoding == Encoding::Frequency) return positional_encoding(x, c.pos_freqs);
-  return hash_encoding(x, hash_grid_table(*x.graph, table_name, c.hash, networks), c.hash);
+  return hash_encoding(x, hash_grid_table(*x.graph, table_name, hash, networks), hash);
 }
 
 }  // namespace
+
+HashGridConfig object_hash_config(const FieldConfig& c) {
+  HashGridConfig h = c.hash;
+  if (c.object_max_resolution > 0) h.max_resolution = c.object_max_resolution;
+  return h;
+}
 
 const char* encoding_name(Encoding e) {
   return e == Encoding::HashGrid ? "hashgrid" : "frequency";
@@ -40,7 +47,7 @@ Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& 
                 kExitInternal);
   // The trunk's output layer is the reference's feature_linear; sigma and blend are linear
   // heads on the feature (the same function class as heads on the last hidden layer).
-  Tensor feature = build_mlp(encode(positions, c, "static.hash", 1), trunk_config(c, c.width, 1),
+  Tensor feature = build_mlp(encode(positions, c, c.hash, "static.hash", 1), trunk_config(c, c.width, 1),
                              "static.trunk").output;
   Tensor sigma_blend = dense_layer(feature, 2, Activation::Identity, "static.sigma_blend");
   Tensor colour_in = c.view_dirs ? concat({feature, positional_encoding(viewdirs, c.dir_freqs)})
@@ -63,7 +70,7 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c)
                 kExitInternal);
   const int networks = batched ? static_cast<int>(ps[0]) : 1;
   Tensor xyzt = concat({positions, times});
-  return build_mlp(encode(xyzt, c, "objects.hash", networks), trunk_config(c, 5, networks),
+  return build_mlp(encode(xyzt, c, object_hash_config(c), "objects.hash", networks), trunk_config(c, 5, networks),
                    "objects.trunk").output;
 }
 

@@ -137,6 +137,8 @@ std::vector<ConfigOption> make_options() {
                  if (!c.field.hash_time_auto)
                    c.field.hash.time_max_resolution = static_cast<int>(parse_int("hash-time-res", v, 0, 1 << 20));
                }});
+  o.push_back(int_option("hash-object-max-res", "hash grid of the object NeRFs: cells per dimension of the finest level (0: hash-max-res)", 0, 1 << 20,
+                         [](TrainConfig& c) -> int& { return c.field.object_max_resolution; }));
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: 1 in NDC, else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,
@@ -270,6 +272,8 @@ void validate(const TrainConfig& c) {
     HashGridConfig h = c.field.hash;
     if (h.bound == 0.0f) h.bound = 1.0f;  // 0 is resolved from the scene
     try {
+      validate(h);
+      h.max_resolution = object_hash_config(c.field).max_resolution;
       validate(h);
     } catch (const Error& e) {
       throw Error(std::string("options 'hash-*': ") + e.what());

@@ -34,6 +34,10 @@ struct FieldConfig {
   // hash.time_max_resolution resolved from the scene's frames, about kFramesPerTimeCell
   // frames per cell (scene_field in nova_graphs.hpp); false: hash.time_max_resolution as set.
   bool hash_time_auto = false;
+  // Finest cells per dimension of the object NeRFs' hash grid (0: hash.max_resolution). An
+  // object is seen from one camera per time, so fine levels it cannot constrain fill with
+  // hash-collision noise when it is viewed from elsewhere.
+  int object_max_resolution = 0;
   int depth = 8;
   int width = 256;
   int skip = 4;        // 0-based trunk layer whose output gets the encoded input appended
@@ -44,6 +48,9 @@ struct FieldConfig {
 
 // positions [M, 3], viewdirs [M, 3] (unused without view_dirs) -> raw [M, 5].
 Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& config);
+
+// The object NeRFs' hash grid: `hash` with object_max_resolution in place of its finest level.
+HashGridConfig object_hash_config(const FieldConfig& config);
 
 // positions [B, M, 3] (or [M, 3] for B = 1), times of the same shape with 1 column -> raw
 // [B, M, 5] (or [M, 5]). B object networks with independent weights.
