@@ -66,7 +66,8 @@ int train(const Args& args) {
 
   // Preset, then the config file (on --resume: the run's own), then the command line.
   std::string config_path = vm.count("config") ? vm["config"].as<std::string>() : "";
-  if (resume && config_path.empty()) config_path = out + "/" + kConfigFile;
+  const bool own_config = resume && config_path.empty();
+  if (own_config) config_path = out + "/" + kConfigFile;
   TrainConfig config = preset_config(vm.count("preset") ? vm["preset"].as<std::string>() : "quick");
   if (!config_path.empty()) {
     std::ifstream in(config_path);
@@ -74,7 +75,8 @@ int train(const Args& args) {
     std::stringstream text;
     text << in.rdbuf();
     std::vector<std::pair<std::string, std::string>> others;  // e.g. the scene of a config.ini
-    config = parse_config_text(text.str(), config_path, &others);
+    config = parse_config_text(text.str(), config_path, &others,
+                               own_config ? ConfigFile::RunFile : ConfigFile::Partial);
     for (auto& [k, v] : others)
       if (k != "scene") throw Error(config_path + ": unknown option '" + k + "'");
   }

@@ -35,7 +35,7 @@ RunFiles read_run(const std::string& dir) {
   std::vector<std::pair<std::string, std::string>> others;
   RunFiles r;
   r.dir = dir;
-  r.config = parse_config_text(text.str(), cfg, &others);
+  r.config = parse_config_text(text.str(), cfg, &others, ConfigFile::RunFile);
   for (auto& [k, v] : others)
     if (k == "scene") r.scene = v;
   if (!fs::exists(dir + "/" + kCheckpointFile))

@@ -1,5 +1,6 @@
 #include "nova/train_config.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <cmath>
@@ -139,6 +140,7 @@ std::vector<ConfigOption> make_options() {
                }});
   o.push_back(int_option("hash-object-max-res", "hash grid of the object NeRFs: cells per dimension of the finest level (0: hash-max-res)", 0, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.field.object_max_resolution; }));
+  o.back().before = "0";  // session 7
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: 1 in NDC, else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,
@@ -180,8 +182,10 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.w_distortion; }));
   o.push_back(bool_option("static-background-only", "joint training: the static NeRF learns from background pixels only (object pixels send it no gradient; not in the reference)",
                           [](TrainConfig& c) -> bool& { return c.static_background_only; }));
+  o.back().before = "false";  // session 6
   o.push_back(float_option("w-free-space", "weight of the free-space loss: object weight in front of the surface the disparity gives, on its mask's rays (joint training; NDC scenes with disp/ only; not in the reference)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_free_space; }));
+  o.back().before = "0";  // session 6
   o.push_back(float_option("free-space-margin", "free-space loss: depth (NDC t) in front of the disparity's surface that still counts as the surface", 0.0, 1.0,
                            [](TrainConfig& c) -> float& { return c.free_space_margin; }));
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
@@ -305,7 +309,7 @@ std::string format_config(const TrainConfig& c, const std::vector<std::string>& 
 }
 
 TrainConfig parse_config_text(const std::string& text, const std::string& origin,
-                              std::vector<std::pair<std::string, std::string>>* others) {
+                              std::vector<std::pair<std::string, std::string>>* others, ConfigFile kind) {
   std::vector<std::pair<std::string, std::string>> entries;
   std::istringstream in(text);
   std::string line;
@@ -339,6 +343,11 @@ TrainConfig parse_config_text(const std::string& text, const std::string& origin
       others->emplace_back(k, v);
     }
   }
+  if (kind == ConfigFile::RunFile)
+    for (const ConfigOption& o : config_options()) {
+      const bool written = std::any_of(entries.begin(), entries.end(), [&](const auto& e) { return e.first == o.key; });
+      if (!written && !o.before.empty()) o.set(c, o.before);
+    }
   return c;
 }
 

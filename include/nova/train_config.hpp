@@ -73,6 +73,9 @@ struct ConfigOption {
   std::string help;
   std::function<std::string(const TrainConfig&)> get;
   std::function<void(TrainConfig&, const std::string&)> set;  // parses; Error on a bad value
+  // What a run's config.ini written before this option existed meant, for options whose
+  // `quick` value changed what such a run did (empty: the preset's value is right).
+  std::string before{};
 };
 const std::vector<ConfigOption>& config_options();
 
@@ -88,8 +91,12 @@ std::string format_config(const TrainConfig& c, const std::vector<std::string>& 
 // Parses format_config's text: starts from the preset named in it (quick if none), applies
 // every known key; unknown keys are returned in `others` (key -> value) when given, else an
 // Error. `origin` names the file in errors.
+// A run's own config.ini (`RunFile`: resume, render, eval) names every option of the version
+// that wrote it, so an option it lacks takes its `before` value, which reproduces that run.
+enum class ConfigFile { Partial, RunFile };
 TrainConfig parse_config_text(const std::string& text, const std::string& origin,
-                              std::vector<std::pair<std::string, std::string>>* others = nullptr);
+                              std::vector<std::pair<std::string, std::string>>* others = nullptr,
+                              ConfigFile kind = ConfigFile::Partial);
 
 // Moves frames 0, n, 2n, ... of `scene` out of training into its ground-truth views (kind
 // "heldout", named frame_III), the LLFF evaluation protocol.
