@@ -8,6 +8,7 @@
 #include <string>
 
 #include "nova/error.hpp"
+#include "nova/nova_graphs.hpp"
 #include "nova/train_config.hpp"
 
 using namespace nova;
@@ -58,6 +59,19 @@ BOOST_AUTO_TEST_CASE(floats_print_as_typed_and_read_back_bit_exact) {
   // A leading '+' (which std::from_chars refuses) still reads.
   margin.set(c, "+0.25");
   BOOST_TEST(c.free_space_margin == 0.25f);
+}
+
+BOOST_AUTO_TEST_CASE(the_hash_box_comes_from_the_scene) {
+  for (const std::string& name : preset_names()) {
+    const TrainConfig c = preset_config(name);
+    BOOST_TEST(c.field.hash.bound == 0.0f, name);
+    RayGeometry metric;  // a Blender-like scene: cameras up to 4.03 from the origin
+    metric.extent = 4.03f;
+    BOOST_TEST(scene_field(c.field, metric).hash.bound == 4.03f, name);
+    RayGeometry ndc;
+    ndc.ndc = true;
+    BOOST_TEST(scene_field(c.field, ndc).hash.bound == 1.0f, name);
+  }
 }
 
 BOOST_AUTO_TEST_CASE(a_run_written_before_an_option_existed_keeps_its_behaviour) {
