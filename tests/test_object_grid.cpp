@@ -22,6 +22,7 @@ FieldConfig small_hash_field() {
   f.hash.log2_size = 10;
   f.hash.min_resolution = 4;
   f.hash.max_resolution = 64;
+  f.hash.bound = 1.0f;  // as scene_field resolves it for an NDC scene
   f.depth = 1;
   f.width = 8;
   f.skip = -1;

@@ -219,10 +219,6 @@ std::vector<std::string> preset_names() { return {"quick", "reference"}; }
 
 TrainConfig preset_config(const std::string& name) {
   TrainConfig c;  // the defaults are the reference
-  // The hash grid's box from the scene (1 in NDC, the cameras' extent otherwise): with
-  // HashGridConfig's bound of 1, a metric scene (Blender, D-NeRF) was clamped to [-1, 1]^3
-  // (dnerf_lego_tiny 18.51 dB; from the scene 20.47).
-  c.field.hash.bound = 0.0f;
   if (name == "reference") {
     c.preset = "reference";
     return c;

@@ -30,7 +30,11 @@ inline constexpr double kFramesPerTimeCell = 3.0;
 
 struct FieldConfig {
   Encoding encoding = Encoding::Frequency;
-  HashGridConfig hash;  // with Encoding::HashGrid; hash.bound <= 0: resolved from the scene
+  // With Encoding::HashGrid. hash.bound <= 0 (the default): resolved from the scene by
+  // scene_field, 1 in NDC, the cameras' extent otherwise; HashGridConfig's own bound of 1 had
+  // clamped metric scenes (Blender, D-NeRF) to [-1, 1]^3 (dnerf_lego_tiny 18.51 dB; from the
+  // scene 20.47). A field built from an unresolved config is refused by the encoding.
+  HashGridConfig hash{.bound = 0.0f};
   // hash.time_max_resolution resolved from the scene's frames, about kFramesPerTimeCell
   // frames per cell (scene_field in nova_graphs.hpp); false: hash.time_max_resolution as set.
   bool hash_time_auto = false;
