@@ -83,12 +83,22 @@ __kernel void depth_loss_backward(__global const float* p, __global const float*
 // 0), where the static NeRF, pretrained on such pixels, gives a depth to trust; on object
 // rays p is not (a hazy object renders a small p). A constant here: p gets no gradient. For
 // NeRF n >= first on ray r, with its own weights w_i = T_i alpha_i and
-// h_i = max(0, z*_r - margin - z_i) (a, b from free_space_fit):
+// h_i = max(0, z*_r - margin - z_i) + behind max(0, z_i - z*_r - margin) (a, b from
+// free_space_fit):
 //   partial[n R + r] = valid_r mask_n(r) sum_i w_i h_i.
+// With behind > 0 weight more than the margin *behind* the surface costs too: from the one
+// camera that sees an object at a time, an object pushed back along its rays renders the same
+// image, so only this term holds it at the disparity's depth (seen from elsewhere it shifts).
 // Unlike the depth loss on the expected depth, this sees a haze in front of a surface even
 // where the expected depth is right, and unlike the distortion loss it sees a compact layer
 // at the wrong depth. Layout as kernels/distortion.cl (raw [N, R*S, C], sigma in channel 3).
 inline float fs_alpha(float s, float d) { return -expm1(-fmax(s, 0.0f) * d); }
+
+// h of sample depth zi for the surface at zs (= z*_r): distance beyond the margin, in front
+// with weight 1 and behind with weight `behind`.
+inline float fs_cost(float zs, float zi, float margin, float behind) {
+  return fmax(zs - margin - zi, 0.0f) + (behind != 0.0f ? behind * fmax(zi - zs - margin, 0.0f) : 0.0f);
+}
 
 // work[at .. at + 3) = (a, b, n) of the least-squares fit p ~ a + b t over the rays with
 // valid[r] mask[r] (mask row 0); n < 2: no fit. Once per pass, one work-item's fixed-order
@@ -127,7 +137,7 @@ __kernel void free_space_partial(__global const float* raw, __global const float
                                  __global const float* valid, __global const float* mask,
                                  __global const float* noise, __global float* partial, uint N,
                                  uint R, uint S, uint C, uint delta_stride, int use_noise,
-                                 uint first, float margin) {
+                                 uint first, float margin, float behind) {
   const uint nr = get_global_id(0);
   if (nr >= N * R) return;
   __global const float* fit = partial + N * R;
@@ -137,13 +147,13 @@ __kernel void free_space_partial(__global const float* raw, __global const float
     partial[nr] = 0.0f;
     return;
   }
-  const float zt = fit[0] + fit[1] * t[r] - margin;
+  const float zs = fit[0] + fit[1] * t[r];
   float T = 1.0f, L = 0.0f;
   for (uint i = 0; i < S; ++i) {
     const size_t e = (size_t)n * R * S + (size_t)r * S + i;
     const float a = fs_alpha(raw[e * C + 3] + (use_noise ? noise[e] : 0.0f),
                              delta[n * delta_stride + r * S + i]);
-    L += T * a * fmax(zt - z[(size_t)r * S + i], 0.0f);
+    L += T * a * fs_cost(zs, z[(size_t)r * S + i], margin, behind);
     T *= 1.0f - a;
   }
   partial[nr] = m * L;
@@ -160,14 +170,15 @@ __kernel void free_space_backward(__global const float* raw, __global const floa
                                   __global float* work,
                                   __global float* grad, __global float* dp, uint N, uint R,
                                   uint S, uint C, uint delta_stride, int use_noise, uint first,
-                                  float margin, float scale, int accumulate, int clear_dp) {
+                                  float margin, float behind, float scale, int accumulate,
+                                  int clear_dp) {
   const uint nr = get_global_id(0);
   if (nr >= N * R) return;
   if (clear_dp && nr < R) dp[nr] = 0.0f;
   const uint n = nr / R, r = nr % R;
   __global const float* fit = work + (size_t)N * R * S;
   const float coef = n < first || fit[2] < 2.0f ? 0.0f : gloss[0] * scale * valid[r] * mask[nr];
-  const float zt = fit[0] + fit[1] * t[r] - margin;
+  const float zs = fit[0] + fit[1] * t[r];
   const size_t first_e = (size_t)n * R * S + (size_t)r * S;
   __global float* ts = work + first_e;
   float T = 1.0f;
@@ -181,7 +192,7 @@ __kernel void free_space_backward(__global const float* raw, __global const floa
     const size_t e = first_e + k;
     const float s = raw[e * C + 3] + (use_noise ? noise[e] : 0.0f);
     const float d = delta[n * delta_stride + r * S + k];
-    const float a = fs_alpha(s, d), h = fmax(zt - z[(size_t)r * S + k], 0.0f);
+    const float a = fs_alpha(s, d), h = fs_cost(zs, z[(size_t)r * S + k], margin, behind);
     const float ex = exp(-fmax(s, 0.0f) * d);
     // d alpha / d raw = delta exp(-sigma delta) above the ReLU; 0 once exp underflows.
     const float dsig = s > 0.0f && ex > 0.0f && coef != 0.0f ? coef * ts[k] * (h - A) * ex * d : 0.0f;

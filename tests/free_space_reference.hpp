@@ -13,7 +13,7 @@ namespace nova::test {
 
 struct FreeSpaceCase {
   size_t N = 0, R = 0, S = 0, C = 5, first = 1;
-  float margin = 0.05f;
+  float margin = 0.05f, behind = 0.0f;
   std::vector<float> raw, delta, z, depth, target, valid, masks, noise;  // noise may be empty
   bool per_nerf_delta = true;
 };
@@ -38,14 +38,15 @@ inline double free_space_reference(const FreeSpaceCase& f, const std::vector<flo
     for (size_t r = 0; r < f.R; ++r) {
       const double m = f.valid[r] * f.masks[k * f.R + r];
       if (m == 0) continue;
-      const double zt = a + b * f.target[r] - f.margin;
+      const double zs = a + b * f.target[r];
       double T = 1, L = 0;
       for (size_t i = 0; i < f.S; ++i) {
         const size_t e = (k * f.R + r) * f.S + i;
         const double s = raw[e * f.C + 3] + (f.noise.empty() ? 0.0 : f.noise[e]);
         const double d = f.delta[(f.per_nerf_delta ? k * f.R * f.S : 0) + r * f.S + i];
         const double a = 1 - std::exp(-std::max(s, 0.0) * d);
-        L += T * a * std::max(zt - f.z[r * f.S + i], 0.0);
+        const double zi = f.z[r * f.S + i];
+        L += T * a * (std::max(zs - f.margin - zi, 0.0) + f.behind * std::max(zi - zs - f.margin, 0.0));
         T *= 1 - a;
       }
       sum += m * L;
@@ -90,7 +91,8 @@ inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool dep
   Tensor noise = f.noise.empty() ? Tensor{} : g.input("noise", Shape{N, R * S});
   Tensor zero = g.input("zero", Shape{R});
   Tensor depth_mse = depth_also_in_mse ? mse(depth, zero) : Tensor{};
-  Tensor fs = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, f.first);
+  Tensor fs = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, f.first,
+                              f.behind);
   g.keep(fs);
   g.set_loss(depth_also_in_mse ? weighted_sum({depth_mse, fs}, {1.0f, 1.0f}) : fs);
   Executor ex(rt, g);

@@ -1,7 +1,8 @@
 // The free-space loss against a float64 reference (tests/free_space_reference.hpp): forward,
 // the gradient of raw against central differences of that reference, that the rendered depth
 // (which only places the target) gets no gradient from it, and what it is for: a haze in
-// front of the disparity's surface costs, the same opacity at the surface does not.
+// front of the disparity's surface costs, the same opacity at the surface does not, and with
+// `behind` set the same opacity behind the surface costs as well.
 //
 // Tolerances: the loss sums at most N R S = 3 x 37 x 11 float32 products of O(1) values, so
 // rtol 1e-4. Gradients: the analytic sigma gradient of the device against float64 central
@@ -51,8 +52,10 @@ FreeSpaceRun run_device(const FreeSpaceCase& f, bool depth_also_in_mse = false) 
 BOOST_AUTO_TEST_SUITE(free_space_loss_op)
 
 BOOST_AUTO_TEST_CASE(forward_and_gradient_match_reference) {
-  for (bool noise : {false, true}) {
-    const FreeSpaceCase f = make_case(3, 37, 11, noise, noise ? 20 : 10);
+  for (int variant = 0; variant < 3; ++variant) {
+    const bool noise = variant == 1;
+    FreeSpaceCase f = make_case(3, 37, 11, noise, 10 * (variant + 1));
+    f.behind = variant == 2 ? 0.7f : 0.0f;  // weight behind the surface costs too
     const FreeSpaceRun d = run_device(f);
     const double ref = free_space_reference(f, f.raw);
     BOOST_TEST(ref > 1e-3);  // the case has weight in front of its targets
@@ -60,7 +63,8 @@ BOOST_AUTO_TEST_CASE(forward_and_gradient_match_reference) {
     const std::vector<double> fd = free_space_sigma_fd(f, 1e-4f);
     double scale = 0;
     for (double v : fd) scale = std::max(scale, std::abs(v));
-    expect_close(d.d_raw, fd, 1e-5 * scale, 1e-3, noise ? "d raw (noise)" : "d raw");
+    expect_close(d.d_raw, fd, 1e-5 * scale, 1e-3,
+                 variant == 0 ? "d raw" : variant == 1 ? "d raw (noise)" : "d raw (behind)");
   }
 }
 
@@ -96,6 +100,13 @@ BOOST_AUTO_TEST_CASE(haze_in_front_costs_a_surface_does_not) {
   f.raw[((1 * f.R + 1) * f.S + 6) * f.C + 3] = 0.0f;
   f.raw[((1 * f.R + 1) * f.S + 12) * f.C + 3] = 200.0f;
   BOOST_TEST(run_device(f).loss == 0.0f);
+  // The same opacity behind the surface, at z = 0.9 (sample 18): free unless `behind` is set,
+  // then 0.9 - 0.6 - 0.05 = 0.25 of distance at weight 2 for one of the two rays.
+  f.raw[((1 * f.R + 1) * f.S + 12) * f.C + 3] = 0.0f;
+  f.raw[((1 * f.R + 1) * f.S + 18) * f.C + 3] = 200.0f;
+  BOOST_TEST(run_device(f).loss == 0.0f);
+  f.behind = 2.0f;
+  BOOST_TEST(run_device(f).loss == 0.25, boost::test_tools::tolerance(1e-3));
 }
 
 BOOST_AUTO_TEST_SUITE_END()

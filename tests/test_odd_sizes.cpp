@@ -596,6 +596,7 @@ BOOST_AUTO_TEST_CASE(depth_loss_kernels) {
   f.valid = w;
   f.masks = random_floats(f.N * kRows, 0, 1, 185);
   for (float& m : f.masks) m = m < 0.3f ? 0.0f : 1.0f;
+  f.behind = 0.5f;  // both sides of the surface
   const FreeSpaceRun run = run_free_space(f, rt());
   expect_close({run.loss}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss");
   const std::vector<double> ffd = free_space_sigma_fd(f, 1e-3f);

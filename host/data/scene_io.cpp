@@ -7,6 +7,7 @@
 
 #include "data/fs_util.hpp"
 #include "nova/error.hpp"
+#include "nova/nova_graphs.hpp"
 
 namespace nova {
 
@@ -61,6 +62,7 @@ std::string scene_summary(const Scene& s) {
   o << "  rays        " << (s.ndc ? "NDC (forward-facing, near plane 1)" : "Euclidean")
     << ", bounds [" << s.near << ", " << s.far << "]";
   if (s.bd_factor > 0) o << " after bd_factor " << s.bd_factor;
+  if (s.ndc) o << "; every training ray within |x|, |y| <= " << ray_geometry(s).extent;
   o << "\n";
   double span = 0;
   for (const auto& f : s.frames)

@@ -66,6 +66,35 @@ int time_axis_frames(const Scene& scene) {
   return static_cast<int>(std::lround(std::min(2.0 / gap, 1e6)));
 }
 
+// Half-size of the NDC box that holds every training ray from the near plane (NDC t = 0) to
+// infinity (t = 1). NDC is the reference camera's frustum, so a camera that moved sideways
+// sees past x, y = +-1; a box clamped at 1 would give every sample beyond it the encoding of
+// the box's face (streaks along x or y in the renders). Rays are straight lines in NDC and the
+// image corners span the frustum, so the extremes are at the corners' two ends. At least 1.
+float ndc_extent(const Scene& scene) {
+  constexpr double kNear = 1.0;  // RayOptions::ndc_near
+  double extent = 1.0;
+  for (const Frame& f : scene.frames) {
+    const Camera& c = f.camera;
+    const double ax = -c.fx / c.cx, ay = -c.fy / c.cy;
+    for (double i : {0.0, c.width - 1.0})
+      for (double j : {0.0, c.height - 1.0}) {
+        const double u = (i - c.cx) / c.fx, v = -(j - c.cy) / c.fy;
+        double d[3], o[3];
+        for (int k = 0; k < 3; ++k) {
+          d[k] = c.rotation(k, 0) * u + c.rotation(k, 1) * v - c.rotation(k, 2);
+          o[k] = c.position(k);
+        }
+        if (!(d[2] < 0.0)) continue;  // a ray that does not look into the scene
+        const double t = -(kNear + o[2]) / d[2];
+        for (int k = 0; k < 3; ++k) o[k] += t * d[k];
+        for (double x : {ax * o[0] / o[2], ay * o[1] / o[2], ax * d[0] / d[2], ay * d[1] / d[2]})
+          if (std::isfinite(x)) extent = std::max(extent, std::fabs(x));
+      }
+  }
+  return static_cast<float>(extent);
+}
+
 }  // namespace
 
 RayGeometry ray_geometry(const Scene& scene) {
@@ -82,6 +111,7 @@ RayGeometry ray_geometry(const Scene& scene) {
     g.far = 1.0f;
     g.ax = static_cast<float>(-c.fx / c.cx);
     g.ay = static_cast<float>(-c.fy / c.cy);
+    g.extent = ndc_extent(scene);
   } else {
     if (!(scene.far > scene.near) || scene.near < 0)
       throw Error("scene '" + scene.name + "': bounds [" + std::to_string(scene.near) + ", " +
@@ -129,7 +159,8 @@ Tensor with_free_space_term(StepGraph& s, const TrainConfig& c, const RayGeometr
   if (c.w_free_space <= 0.0f || !disparity_usable(geo)) return loss;
   add_depth_inputs(s, c);
   Tensor f = free_space_loss(raw, smp.delta, smp.z, depth, s.target_depth, s.depth_valid,
-                             s.target_masks, s.noise, c.free_space_margin, 1);
+                             s.target_masks, s.noise, c.free_space_margin, 1,
+                             c.free_space_behind);
   s.terms.emplace_back("free_space", f);
   return weighted_sum({loss, f}, {1.0f, c.w_free_space});
 }
@@ -149,7 +180,7 @@ Tensor with_distortion_term(StepGraph& s, const TrainConfig& c, Tensor raw, cons
 
 FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g) {
   FieldConfig out = f;
-  if (out.hash.bound <= 0.0f) out.hash.bound = g.extent;
+  if (out.hash.bound <= 0.0f) out.hash.bound = g.ndc && !f.ndc_box_from_rays ? 1.0f : g.extent;
   if (out.hash_time_auto) {
     out.hash.time_max_resolution =
         g.frames > 0 ? std::max(1, static_cast<int>(std::lround(g.frames / kFramesPerTimeCell))) : 0;

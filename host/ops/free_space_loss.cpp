@@ -1,5 +1,7 @@
 // The free-space loss (kernels/depth_loss.cl): weight in front of the surface the disparity
 // puts on each ray.
+#include <cmath>
+
 #include "nova/executor.hpp"
 #include "nova/losses.hpp"
 #include "ray_sample_layout.hpp"
@@ -10,8 +12,8 @@ namespace {
 // Inputs: raw, delta, z, depth, target, valid, masks[, noise].
 class FreeSpaceLossOp final : public Op {
  public:
-  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin)
-      : l_(l), noise_(noise), margin_(margin) {}
+  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin, float behind)
+      : l_(l), noise_(noise), margin_(margin), behind_(behind) {}
   std::string type() const override { return "free_space_loss"; }
 
   void forward(ExecContext& ctx) override {
@@ -22,7 +24,7 @@ class FreeSpaceLossOp final : public Op {
         .arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
         .arg(detail::u32(l_.samples, "samples")).arg(detail::u32(l_.channels, "channels"))
         .arg(l_.delta_stride()).arg(static_cast<int>(noise_)).arg(detail::u32(l_.first, "first NeRF"))
-        .arg(margin_).run(l_.pairs());
+        .arg(margin_).arg(behind_).run(l_.pairs());
     ctx.launch("loss", "sum_finish").arg(ctx.workspace()).arg(ctx.out(0))
         .arg(detail::u32(l_.pairs(), "nerfs x rays")).arg(l_.pair_scale()).run(1);
   }
@@ -41,7 +43,7 @@ class FreeSpaceLossOp final : public Op {
         .arg(dp ? dp : g).arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
         .arg(detail::u32(l_.samples, "samples")).arg(detail::u32(l_.channels, "channels"))
         .arg(l_.delta_stride()).arg(static_cast<int>(noise_)).arg(detail::u32(l_.first, "first NeRF"))
-        .arg(margin_).arg(l_.pair_scale()).arg(static_cast<int>(ctx.accumulate_in(0)))
+        .arg(margin_).arg(behind_).arg(l_.pair_scale()).arg(static_cast<int>(ctx.accumulate_in(0)))
         .arg(static_cast<int>(clear_dp)).run(l_.pairs());
   }
 
@@ -66,14 +68,14 @@ class FreeSpaceLossOp final : public Op {
 
   detail::RaySampleLayout l_;
   bool noise_;
-  float margin_;
+  float margin_, behind_;
 };
 
 }  // namespace
 
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise, float margin,
-                       size_t first_nerf) {
+                       size_t first_nerf, float behind) {
   const auto l = detail::ray_sample_layout("free_space_loss", raw, delta, z, noise, first_nerf);
   const auto bad = [](const std::string& what) { throw Error("free_space_loss: " + what, kExitInternal); };
   for (const Tensor& t : {depth, target, valid})
@@ -83,13 +85,14 @@ Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor 
     bad("masks must be [" + std::to_string(l.nerfs) + ", " + std::to_string(l.rays) + "], got " +
         masks.shape().str());
   if (!(margin >= 0.0f)) bad("margin must be >= 0");
+  if (!(behind >= 0.0f) || !std::isfinite(behind)) bad("behind must be a finite number >= 0");
   for (const Tensor& t : {target, valid, masks})
     if (t.info().requires_grad) bad(t.info().name + " is data and cannot take a gradient");
   Graph& g = *raw.graph;
   Tensor y = g.activation(raw.info().name + ".free_space_loss", Shape{1});
   std::vector<Tensor> inputs = {raw, delta, z, depth, target, valid, masks};
   if (noise.valid()) inputs.push_back(noise);
-  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin), inputs, {y});
+  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin, behind), inputs, {y});
   return y;
 }
 

@@ -141,8 +141,11 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("hash-object-max-res", "hash grid of the object NeRFs: cells per dimension of the finest level (0: hash-max-res)", 0, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.field.object_max_resolution; }));
   o.back().before = "0";  // session 7
-  o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: 1 in NDC, else the largest camera coordinate)",
+  o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: from the scene: NDC, the training rays' extent (see hash-ndc-box-from-rays); else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
+  o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray (more than [-1, 1] where the camera moves sideways); false: [-1, 1]",
+                          [](TrainConfig& c) -> bool& { return c.field.ndc_box_from_rays; }));
+  o.back().before = "false";
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.rays; }));
   o.push_back(int_option("samples", "stratified samples per ray", 2, 1024, [](TrainConfig& c) -> int& { return c.samples; }));
@@ -188,6 +191,9 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "0";  // session 6
   o.push_back(float_option("free-space-margin", "free-space loss: depth (NDC t) in front of the disparity's surface that still counts as the surface", 0.0, 1.0,
                            [](TrainConfig& c) -> float& { return c.free_space_margin; }));
+  o.push_back(float_option("free-space-behind", "free-space loss: weight of object weight more than the margin behind the disparity's surface, relative to in front (0: in front only)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.free_space_behind; }));
+  o.back().before = "0";
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(bool_option("occupancy", "skip empty space: occupancy grids from the density, samples in empty cells never reach an MLP",

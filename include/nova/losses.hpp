@@ -56,11 +56,14 @@ Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Te
 // least-squares fit of depth on target over the valid background rays (masks row 0), where
 // the pretrained static NeRF's depth can be trusted: the disparity in the rendered depth's
 // units (a constant: depth gets no gradient). It empties the space in front of an object seen
-// from one camera per time, which the depth loss on the expected depth misses. raw, delta, z,
-// masks, noise as distortion_loss; depth, target, valid [R] as depth_loss.
+// from one camera per time, which the depth loss on the expected depth misses. With
+// `behind` > 0 each sample also costs behind * max(0, z_i - z*_r - margin): weight pushed back
+// along the rays, which the one camera that sees an object at a time cannot tell from the
+// surface, is pulled to the disparity's depth too. raw, delta, z, masks, noise as
+// distortion_loss; depth, target, valid [R] as depth_loss.
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise = {}, float margin = 0.05f,
-                       size_t first_nerf = 1);
+                       size_t first_nerf = 1, float behind = 0.0f);
 
 // The reference code's weights (DESIGN.md, "Loss weights").
 struct NovelViewLossWeights {

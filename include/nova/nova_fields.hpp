@@ -31,13 +31,17 @@ inline constexpr double kFramesPerTimeCell = 3.0;
 struct FieldConfig {
   Encoding encoding = Encoding::Frequency;
   // With Encoding::HashGrid. hash.bound <= 0 (the default): resolved from the scene by
-  // scene_field, 1 in NDC, the cameras' extent otherwise; HashGridConfig's own bound of 1 had
+  // scene_field, the training rays' extent in NDC, the cameras' extent otherwise; HashGridConfig's own bound of 1 had
   // clamped metric scenes (Blender, D-NeRF) to [-1, 1]^3 (dnerf_lego_tiny 18.51 dB; from the
   // scene 20.47). A field built from an unresolved config is refused by the encoding.
   HashGridConfig hash{.bound = 0.0f};
   // hash.time_max_resolution resolved from the scene's frames, about kFramesPerTimeCell
   // frames per cell (scene_field in nova_graphs.hpp); false: hash.time_max_resolution as set.
   bool hash_time_auto = false;
+  // In NDC, hash.bound <= 0 resolves to the half-size of the box that holds every training
+  // ray (RayGeometry::extent: more than 1 where the camera moves sideways); false: 1, the
+  // reference camera's frustum, which clamps what moved cameras see beyond it.
+  bool ndc_box_from_rays = true;
   // Finest cells per dimension of the object NeRFs' hash grid (0: hash.max_resolution). An
   // object is seen from one camera per time, so fine levels it cannot constrain fill with
   // hash-collision noise when it is viewed from elsewhere.

@@ -21,8 +21,9 @@ struct RayGeometry {
   bool ndc = false;
   float near = 0.0f, far = 1.0f;  // sample range (NDC: 0 and 1)
   float ax = -1.0f, ay = -1.0f;   // NDC constants -fx/cx, -fy/cy of the training cameras
-  // Half-size of the box around the origin that holds what the cameras see: 1 in NDC, else
-  // the largest camera-origin coordinate (cameras look in at the scene).
+  // Half-size of the box around the origin that holds what the cameras see: in NDC the extent
+  // of every training ray (at least 1), else the largest camera-origin coordinate (cameras
+  // look in at the scene).
   float extent = 1.0f;
   int num_objects = 0;
   bool disparity = false;  // every training frame has a disparity map

@@ -47,6 +47,9 @@ struct TrainConfig {
   // disparity gives (not in the reference: 0 there).
   float w_free_space = 0.0f;
   float free_space_margin = 0.05f;
+  // Weight more than the margin *behind* that depth costs free_space_behind times as much: an
+  // object pushed back along the one camera's rays renders the same training image.
+  float free_space_behind = 0.0f;
   // Empty-space skipping (occupancy.hpp): one grid per NeRF, updated from the density every
   // occupancy_every steps once occupancy_warmup steps of a phase have passed; samples in
   // empty cells never reach an MLP.
