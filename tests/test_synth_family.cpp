@@ -137,6 +137,17 @@ BOOST_AUTO_TEST_CASE(sampler_covers_the_family) {
           BOOST_TEST((s.camera.positions[size_t(i)] == s.camera.positions[size_t(i % c)]));
         BOOST_TEST((s.camera.positions[0] != s.camera.positions[1]));
       }
+      // Props: 1-3, apart from one another, in front of the wall, resting on the floor.
+      const auto& props = s.background.props;
+      BOOST_TEST((props.size() >= 1u && props.size() <= 3u));
+      for (size_t a = 0; a < props.size(); ++a) {
+        const double ra = synth_bounding_radius(props[a].shape);
+        BOOST_TEST(props[a].centre[2] - ra > s.background.wall_z);
+        for (size_t b = 0; b < a; ++b) {
+          const SynthVec d = synth::sub(props[a].centre, props[b].centre);
+          BOOST_TEST(std::sqrt(synth::dot(d, d)) > ra + synth_bounding_radius(props[b].shape));
+        }
+      }
       // Objects: in front of the wall, beyond 1.4 from the cameras' plane, above the floor.
       for (const auto& o : s.objects) {
         const double r = synth_bounding_radius(o.shape);

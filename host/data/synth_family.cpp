@@ -147,10 +147,20 @@ SynthScene draw_family_scene(uint32_t seed) {
     // Resting on the floor, within 1 of the wall, anywhere across the wall's visible width.
     const double half_h = kind == SynthShapeKind::sphere ? prop.shape.size[0] : prop.shape.size[1];
     const double z = bg.wall_z + synth_bounding_radius(prop.shape) + g.uniform(0.05, 0.3);
-    prop.centre = {g.uniform(-0.8, 0.8) * wall * tan_x, bg.floor_y + half_h, z};
+    // Props do not overlap: redraw the position a few times, then leave the prop out.
+    bool placed = false;
+    for (int attempt = 0; attempt < 8 && !placed; ++attempt) {
+      prop.centre = {g.uniform(-0.8, 0.8) * wall * tan_x, bg.floor_y + half_h, z};
+      placed = true;
+      for (const SynthProp& q : bg.props) {
+        const double gap = synth_bounding_radius(q.shape) + synth_bounding_radius(prop.shape) + 0.05;
+        const V3 dq = sub(q.centre, prop.centre);
+        placed = placed && dot(dq, dq) > gap * gap;
+      }
+    }
     const double prop_hue = g.unit(), prop_sat = g.uniform(0.3, 0.6);
     prop.texture = draw_texture(g, prop_hue, prop_sat, r);
-    bg.props.push_back(prop);
+    if (placed) bg.props.push_back(prop);
   }
 
   // Camera path: camera centres near the origin, all looking at `target` on the far side.
@@ -190,7 +200,7 @@ SynthScene draw_family_scene(uint32_t seed) {
     // Held out: above and below the path's middle, off the path.
     const V3 mid = mul(add(cam.positions.front(), cam.positions.back()), 0.5);
     const double lift = g.uniform(0.04, 0.07) * wall;
-    cam.heldout = {add(mid, {g.uniform(-0.05, 0.05) * wall * 0.2, lift, 0.05}),
+    cam.heldout = {add(mid, {g.uniform(-0.01, 0.01) * wall, lift, 0.05}),
                    add(mid, {g.uniform(0.3, 0.6) * lift * dir, -0.8 * lift, -0.1})};
   }
 
