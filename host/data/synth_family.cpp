@@ -179,7 +179,7 @@ SynthScene draw_family_scene(uint32_t seed) {
     const double dz = g.uniform(-0.25, 0.25), ph = g.unit();
     for (int i = 0; i < n; ++i) {
       const double u = double(i) / (n - 1);
-      cam.positions.push_back({dir * span * (u - 0.5), cam_y + wobble * std::sin(2 * kPi * (u + ph)), dz * u});
+      cam.positions.push_back({dir * span * (u - 0.5), cam_y + wobble * std::sin(2 * kPi * (u + ph)), dz * u + 0.0});  // + 0.0: no -0 in synth.txt
     }
   } else if (cam.kind == SynthCameraKind::arc) {
     const double half = g.uniform(5, 12) * kPi / 180;
