@@ -133,7 +133,7 @@ BOOST_AUTO_TEST_CASE(warp_matches_fresh_render) {
 
     // Object masks: the warped mask (>= 0.5) disagrees with the rendered one only on the
     // silhouette band, a small fraction of the object's area.
-    for (int k = 1; k <= SynthWorld::kObjects; ++k) {
+    for (int k = 1; k <= w.objects(); ++k) {
       const Image8 wm = warp_image(src.masks[k], h);
       double area = 0, wrong = 0;
       for (int y = 0; y < cam.height; ++y)

@@ -12,12 +12,14 @@ int synth(const Args& args) {
   desc.add_options()("help,h", "show this help")(
       "out", po::value<std::string>()->required(), "output folder (must not exist)")(
       "preset", po::value<std::string>()->default_value("default"),
-      "tiny (tests: 10 frames, 64x48) | default (demo: 24 frames, 160x120)")(
+      "tiny (tests: 10 frames, 64x48) | default (demo: 24 frames, 160x120) | family (the "
+      "seed draws a whole scene: 1-3 objects, shapes, motion, camera path, size, "
+      "imperfect training inputs)")(
       "seed", po::value<uint32_t>()->default_value(0), "seed: same seed, same bytes")(
       "force", po::bool_switch(), "replace an existing output folder");
   po::variables_map vm;
   if (!parse(args, desc, vm,
-             "usage: nova synth --out DIR [--preset tiny|default] [--seed S] [--force]"))
+             "usage: nova synth --out DIR [--preset tiny|default|family] [--seed S] [--force]"))
     return 0;
   const auto t0 = std::chrono::steady_clock::now();
   const std::string report =

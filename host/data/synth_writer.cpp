@@ -68,7 +68,7 @@ Pose34 raw_instance_map(const ComposeInstance& inst, const WorldTransform& a) {
 // The composition targets of the preset, written in the processed frame: translations are
 // given in raw units and mapped, pivots are the objects' centres.
 ComposeSpec make_spec(const SynthWorld& w, const WorldTransform& a) {
-  const int n = w.preset().frames;
+  const int n = w.preset().frames, k_objects = w.objects();
   auto centre = [&](int obj, double t) {
     const Pose34 p = w.object_pose(obj, t);
     return a.apply_point({p[3], p[7], p[11]});
@@ -83,27 +83,27 @@ ComposeSpec make_spec(const SynthWorld& w, const WorldTransform& a) {
                tl = frame_time(n - 1, n);
   {
     ComposeTarget t{"object1_moved", 0, true, {}};
-    ComposeInstance i{1, t0, {0, 0, 0}, raw_offset({0.5, 0.35, 0}), centre(1, t0)};
+    ComposeInstance i{1, t0, {0, 0, 0}, raw_offset(w.scene().compose_shift), centre(1, t0)};
     t.instances.push_back(i);
-    t.instances.push_back({2, t0, {0, 0, 0}, {0, 0, 0}, centre(2, t0)});
+    for (int k = 2; k <= k_objects; ++k) t.instances.push_back({k, t0, {0, 0, 0}, {0, 0, 0}, centre(k, t0)});
     spec.targets.push_back(t);
   }
   {
-    ComposeTarget t{"object2_rotated", n / 2, true, {}};
-    t.instances.push_back({2, tq, {0, 45, 0}, {0, 0, 0}, centre(2, tq)});
+    // The last object turned about its own centre, alone in the background.
+    ComposeTarget t{"object" + std::to_string(k_objects) + "_rotated", n / 2, true, {}};
+    t.instances.push_back({k_objects, tq, {0, 45, 0}, {0, 0, 0}, centre(k_objects, tq)});
     spec.targets.push_back(t);
   }
   {
     ComposeTarget t{"two_copies", 0, true, {}};
     t.instances.push_back({1, t0, {0, 0, 0}, {0, 0, 0}, centre(1, t0)});
-    t.instances.push_back({1, tm, {0, 0, 0}, raw_offset({0, 0.45, 0.3}), centre(1, tm)});
-    t.instances.push_back({2, tl, {20, 0, 10}, {0, 0, 0}, centre(2, tl)});
+    t.instances.push_back({1, tm, {0, 0, 0}, raw_offset(w.scene().compose_copy_shift), centre(1, tm)});
+    if (k_objects >= 2) t.instances.push_back({2, tl, {20, 0, 10}, {0, 0, 0}, centre(2, tl)});
     spec.targets.push_back(t);
   }
   {
     ComposeTarget t{"objects_only", n - 1, false, {}};
-    t.instances.push_back({1, tl, {0, 0, 0}, {0, 0, 0}, centre(1, tl)});
-    t.instances.push_back({2, tl, {0, 0, 0}, {0, 0, 0}, centre(2, tl)});
+    for (int k = 1; k <= k_objects; ++k) t.instances.push_back({k, tl, {0, 0, 0}, {0, 0, 0}, centre(k, tl)});
     spec.targets.push_back(t);
   }
   return spec;
@@ -120,10 +120,12 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
   const fs::path root = staged.path();
   for (const char* d : {"images", "disp", "motion_masks", "gt", "gt/cam0", "gt/compose"})
     fs::create_directories(root / d);
-  for (int k = 0; k <= SynthWorld::kObjects; ++k)
+  const int k_objects = world.objects();
+  const SynthImperfections& imp = world.scene().imperfections;
+  for (int k = 0; k <= k_objects; ++k)
     fs::create_directories(root / "motion_masks" / std::to_string(k));
 
-  // Training frames.
+  // Training frames: the inputs carry the scene's imperfections; depth bounds stay exact.
   std::vector<double> rows;
   std::vector<Pose34> raw;
   std::vector<double> nears;
@@ -131,10 +133,11 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
     const Camera cam = world.camera(i);
     const SynthRender r = world.render(cam, frame_time(i, n));
     const std::string name = frame_name(i);
-    write_png((root / "images" / (name + ".png")).string(), r.rgb);
-    for (int k = 0; k <= SynthWorld::kObjects; ++k)
-      write_png((root / "motion_masks" / std::to_string(k) / (name + ".png")).string(), r.masks[k]);
-    const ImageF disp = inverse_depth(r.depth);
+    write_png((root / "images" / (name + ".png")).string(), synth_training_image(r.rgb, imp, i));
+    const std::vector<Image8> masks = synth_training_masks(r.masks, imp, i);
+    for (int k = 0; k <= k_objects; ++k)
+      write_png((root / "motion_masks" / std::to_string(k) / (name + ".png")).string(), masks[size_t(k)]);
+    const ImageF disp = synth_training_disparity(inverse_depth(r.depth), imp);
     write_npy_f32((root / "disp" / (name + ".npy")).string(),
                   {size_t(disp.height), size_t(disp.width)}, disp.data);
     const auto b = bounds_of(r.depth);
@@ -183,14 +186,16 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
   std::ostringstream info;
   info << "nova synthetic scene\npreset " << p.name << "\nseed " << seed << "\nframes " << n
        << "\nsize " << p.width << "x" << p.height << "\nfocal " << p.focal
-       << "\nobjects " << SynthWorld::kObjects
+       << "\nobjects " << k_objects
        << "\ntime frame i of N: t = 2 i / N - 1\n";
+  // The fixed presets' synth.txt stays as it always was; a family scene says what was drawn.
+  if (p.name == "family") info << describe_synth_scene(world.scene());
   write_text(root / "synth.txt", info.str());
   staged.commit();
 
   std::ostringstream rep;
   rep << "wrote " << out_dir << ": " << n << " frames at " << p.width << "x" << p.height << ", "
-      << SynthWorld::kObjects << " objects, " << n * (1 + p.heldout_cameras)
+      << k_objects << " objects, " << n * (1 + p.heldout_cameras)
       << " ground-truth views, " << spec.targets.size() << " composition targets";
   return rep.str();
 }
