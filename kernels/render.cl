@@ -6,6 +6,11 @@
 //   RGB_SIGMOID    1: the rgb channels are raw and get a sigmoid here; 0: already in [0, 1]
 //   BLEND_SIGMOID  1: the blend channel is raw and gets a sigmoid here; 0: already activated
 //   HARD_BLEND     1: the static blend (NeRF 0) becomes 0 wherever an object blend > 0.5
+//   BLEND_EPS      epsilon of the blend normalisation (default 1e-6f; the reference's 1e-8f)
+//   ALPHA_FULL_SUM 1: alpha_full_i = sum_n alpha_n b_n (the reference code's weights_full)
+//                  in mask, depth and acc; 0: 1 - P_i
+//   NO_BLEND       1: b_n = 1 (plain NeRF compositing; the blend channel gets no gradient)
+//   NERF_DEPTH     1: also write nerf_depth [N, R] = sum_i T^n_i alpha_n z_i
 //
 // Layouts (R rays, S samples per ray, N = NERFS, C >= 5 channels per sample):
 //   raw    [N, R, S, C]  channels 0..2 rgb, 3 sigma (raw: ReLU(sigma + noise) here), 4 blend
@@ -38,11 +43,31 @@
 #ifndef HARD_BLEND
 #define HARD_BLEND 0
 #endif
+#ifndef ALPHA_FULL_SUM
+#define ALPHA_FULL_SUM 0
+#endif
+#ifndef NO_BLEND
+#define NO_BLEND 0
+#endif
+#ifndef NERF_DEPTH
+#define NERF_DEPTH 0
+#endif
 
 // The reference's +1e-10 inside the transmittance product.
 #define TRANS_EPS 1e-10f
 // Keeps b_n / sum(b) finite when every blend is 0 (the sample then adds no density).
+#ifndef BLEND_EPS
 #define BLEND_EPS 1e-6f
+#endif
+
+// 1 / (sum_n blend_n + eps): b_n = blend_n times this (1 without blending).
+inline float blend_norm(float bsum) {
+#if NO_BLEND
+  return 1.0f;
+#else
+  return 1.0f / (bsum + BLEND_EPS);
+#endif
+}
 
 inline float sigmoid_of(float x) { return 1.0f / (1.0f + exp(-x)); }
 
@@ -67,7 +92,10 @@ inline SampleTerms sample_terms(__global const float* p, float delta, float nois
   // d alpha / d sigma = delta exp(-x); written as a product that is 0 (not 0 * inf) once
   // exp(-x) underflows, whatever delta is.
   t.dadraw = s > 0.0f ? (t.trans > 0.0f ? t.trans * delta : 0.0f) : 0.0f;
-#if BLEND_SIGMOID
+#if NO_BLEND
+  t.blend = 1.0f;
+  t.dbdraw = 0.0f;
+#elif BLEND_SIGMOID
   t.blend = sigmoid_of(p[4]);
   t.dbdraw = t.blend * (1.0f - t.blend);
 #else
@@ -109,13 +137,18 @@ __kernel void render_forward(__global const float* raw, __global const float* de
                              __global const float* z, __global const float* noise,
                              __global float* rgb, __global float* nerf_rgb,
                              __global float* mask, __global float* depth, __global float* acc,
-                             uint R, uint S, uint C, uint delta_stride, int use_noise) {
+                             __global float* nerf_depth, uint R, uint S, uint C,
+                             uint delta_stride, int use_noise) {
   const uint r = get_global_id(0);
   if (r >= R) return;
   SampleTerms t[NERFS];
   float T = 1.0f, Tn[NERFS];
   float col[3] = {0.0f, 0.0f, 0.0f}, d = 0.0f, a = 0.0f;
   float m[NERFS], cn[NERFS][3];
+#if NERF_DEPTH
+  float dn[NERFS];
+  for (int n = 0; n < NERFS; ++n) dn[n] = 0.0f;
+#endif
   for (int n = 0; n < NERFS; ++n) {
     Tn[n] = 1.0f;
     m[n] = 0.0f;
@@ -125,17 +158,24 @@ __kernel void render_forward(__global const float* raw, __global const float* de
     load_sample(raw, delta, noise, R, S, C, delta_stride, use_noise, r, i, t);
     float bsum = 0.0f;
     for (int n = 0; n < NERFS; ++n) bsum += t[n].blend;
-    const float inv = 1.0f / (bsum + BLEND_EPS);
+    const float inv = blend_norm(bsum);
     float P = 1.0f, A = 0.0f;
     for (int n = 0; n < NERFS; ++n) {
       const float b = t[n].blend * inv;
       const float ab = t[n].alpha * b;
+#if ALPHA_FULL_SUM
+      A += ab;
+#else
       A += P * ab;
+#endif
       P *= 1.0f - ab;
       for (int k = 0; k < 3; ++k) col[k] += T * ab * t[n].c[k];
       // The NeRF alone, with its own transmittance.
       const float w = Tn[n] * t[n].alpha;
       for (int k = 0; k < 3; ++k) cn[n][k] += w * t[n].c[k];
+#if NERF_DEPTH
+      dn[n] += w * z[(size_t)r * S + i];
+#endif
       Tn[n] *= t[n].trans + TRANS_EPS;
     }
     const float w = T * A;
@@ -148,6 +188,9 @@ __kernel void render_forward(__global const float* raw, __global const float* de
   for (int n = 0; n < NERFS; ++n) {
     mask[(size_t)n * R + r] = m[n];
     for (int k = 0; k < 3; ++k) nerf_rgb[((size_t)n * R + r) * 3 + k] = cn[n][k];
+#if NERF_DEPTH
+    nerf_depth[(size_t)n * R + r] = dn[n];
+#endif
   }
   depth[r] = d;
   acc[r] = a;
@@ -159,12 +202,13 @@ __kernel void render_forward(__global const float* raw, __global const float* de
 // first, forward scan into `work` [(N + 1), R, S].
 //
 // grad_mask bit k says whether the upstream gradient of output k exists (rgb 1, nerf_rgb 2,
-// mask 4, depth 8, acc 16); missing ones are zero.
+// mask 4, depth 8, acc 16, nerf_depth 32); missing ones are zero.
 __kernel void render_backward(__global const float* raw, __global const float* delta,
                               __global const float* z, __global const float* noise,
                               __global const float* g_rgb, __global const float* g_nerf_rgb,
                               __global const float* g_mask, __global const float* g_depth,
-                              __global const float* g_acc, __global float* g_raw,
+                              __global const float* g_acc, __global const float* g_nerf_depth,
+                              __global float* g_raw,
                               __global float* work, uint R, uint S, uint C, uint delta_stride,
                               int use_noise, int grad_mask, int accumulate) {
   const uint r = get_global_id(0);
@@ -177,6 +221,10 @@ __kernel void render_backward(__global const float* raw, __global const float* d
   const float gd = (grad_mask & 8) ? g_depth[r] : 0.0f;
   const float ga = (grad_mask & 16) ? g_acc[r] : 0.0f;
   for (int k = 0; k < 3; ++k) gc[k] = (grad_mask & 1) ? g_rgb[r * 3 + k] : 0.0f;
+#if NERF_DEPTH
+  float gdn[NERFS];
+  for (int n = 0; n < NERFS; ++n) gdn[n] = (grad_mask & 32) ? g_nerf_depth[(size_t)n * R + r] : 0.0f;
+#endif
   for (int n = 0; n < NERFS; ++n) {
     gm[n] = (grad_mask & 4) ? g_mask[(size_t)n * R + r] : 0.0f;
     for (int k = 0; k < 3; ++k)
@@ -193,7 +241,7 @@ __kernel void render_backward(__global const float* raw, __global const float* d
       work[at] = T;
       float bsum = 0.0f;
       for (int n = 0; n < NERFS; ++n) bsum += t[n].blend;
-      const float inv = 1.0f / (bsum + BLEND_EPS);
+      const float inv = blend_norm(bsum);
       float P = 1.0f;
       for (int n = 0; n < NERFS; ++n) {
         work[(n + 1) * rs + at] = Tn[n];
@@ -214,14 +262,18 @@ __kernel void render_backward(__global const float* raw, __global const float* d
     const float T = work[at];
     float bsum = 0.0f;
     for (int n = 0; n < NERFS; ++n) bsum += t[n].blend;
-    const float inv = 1.0f / (bsum + BLEND_EPS);
+    const float inv = blend_norm(bsum);
 
     float b[NERFS], q[NERFS], gcc[NERFS];
     float A = 0.0f, P = 1.0f, G = gd * z[at] + ga;
     for (int n = 0; n < NERFS; ++n) {
       b[n] = t[n].blend * inv;
       const float ab = t[n].alpha * b[n];
+#if ALPHA_FULL_SUM
+      A += ab;
+#else
       A += P * ab;
+#endif
       P *= 1.0f - ab;
       q[n] = 1.0f - ab;
       gcc[n] = gc[0] * t[n].c[0] + gc[1] * t[n].c[1] + gc[2] * t[n].c[2];
@@ -236,7 +288,13 @@ __kernel void render_backward(__global const float* raw, __global const float* d
       suf *= q[n];
     }
     // h_i = gc . sum_n a_n b_n c_n + A G; dL/dP = T (Rs - G) (P enters h as -P and f as +P).
+    // With ALPHA_FULL_SUM, A = sum_n a_n b_n does not involve P: dL/dP = T Rs, and A G
+    // adds T G b_n to dL/da_n and T G a_n to dL/db_n.
+#if ALPHA_FULL_SUM
+    const float gP = T * Rs;
+#else
     const float gP = T * (Rs - G);
+#endif
     float h = A * G;
     float gb[NERFS], gbsum = 0.0f;
     for (int n = 0; n < NERFS; ++n) {
@@ -244,12 +302,21 @@ __kernel void render_backward(__global const float* raw, __global const float* d
       // Composite part.
       float g_alpha = T * b[n] * gcc[n] - gP * dPdq[n] * b[n];
       gb[n] = T * (t[n].alpha * gcc[n] + A * gm[n]) - gP * dPdq[n] * t[n].alpha;
+#if ALPHA_FULL_SUM
+      g_alpha += T * G * b[n];
+      gb[n] += T * G * t[n].alpha;
+#endif
       gbsum += gb[n] * b[n];
       float gcol[3];
       for (int k = 0; k < 3; ++k) gcol[k] = T * t[n].alpha * b[n] * gc[k];
-      // The NeRF alone: L_n = sum_i T^n_i a_n (gn . c_n), f^n_i = 1 - a_n + eps.
+      // The NeRF alone: L_n = sum_i T^n_i a_n (gn . c_n [+ gdn z_i]), f^n_i = 1 - a_n + eps.
       const float Tn = work[(n + 1) * rs + at];
+#if NERF_DEPTH
+      const float gnc = gn[n][0] * t[n].c[0] + gn[n][1] * t[n].c[1] + gn[n][2] * t[n].c[2] +
+                        gdn[n] * z[at];
+#else
       const float gnc = gn[n][0] * t[n].c[0] + gn[n][1] * t[n].c[1] + gn[n][2] * t[n].c[2];
+#endif
       g_alpha += Tn * (gnc - Rn[n]);
       for (int k = 0; k < 3; ++k) gcol[k] += Tn * t[n].alpha * gn[n][k];
       Rn[n] = t[n].alpha * gnc + (t[n].trans + TRANS_EPS) * Rn[n];

@@ -46,6 +46,7 @@ inline RenderRefInput random_render_case(int nerfs, int rays, int samples, int c
 
 struct RenderTargets {
   std::vector<double> rgb, nerf_rgb, mask, depth, acc;
+  std::vector<double> nerf_depth;  // used only when the input asks for nerf_depth
 };
 
 inline RenderTargets random_targets(const RenderRefInput& in, unsigned seed) {
@@ -58,6 +59,7 @@ inline RenderTargets random_targets(const RenderRefInput& in, unsigned seed) {
   for (double z : in.z) zmax = std::max(zmax, z);
   t.depth = to_double(random_floats(R, 0, static_cast<float>(zmax), seed + 3));
   t.acc = to_double(random_floats(R, 0, 1, seed + 4));
+  if (in.nerf_depth) t.nerf_depth = to_double(random_floats(N * R, 0, static_cast<float>(zmax), seed + 5));
   return t;
 }
 
@@ -70,7 +72,8 @@ inline double mean_sq(const std::vector<double>& a, const std::vector<double>& b
 inline double reference_loss(const RenderRefInput& in, const RenderTargets& t) {
   const RenderRefOutput o = render_reference(in);
   return mean_sq(o.rgb, t.rgb) + mean_sq(o.nerf_rgb, t.nerf_rgb) + mean_sq(o.mask, t.mask) +
-         mean_sq(o.depth, t.depth) + mean_sq(o.acc, t.acc);
+         mean_sq(o.depth, t.depth) + mean_sq(o.acc, t.acc) +
+         (in.nerf_depth ? mean_sq(o.nerf_depth, t.nerf_depth) : 0.0);
 }
 
 // The part of reference_loss that depends on ray r (rays are independent), with the
@@ -78,7 +81,7 @@ inline double reference_loss(const RenderRefInput& in, const RenderTargets& t) {
 struct RayProblem {
   RenderRefInput in;
   RenderTargets t;
-  double weights[5];  // 1 / element count of each whole output
+  double weights[6];  // 1 / element count of each whole output
 };
 
 inline RayProblem ray_problem(const RenderRefInput& in, const RenderTargets& t, int r) {
@@ -106,11 +109,12 @@ inline RayProblem ray_problem(const RenderRefInput& in, const RenderTargets& t, 
     p.t.nerf_rgb.insert(p.t.nerf_rgb.end(), t.nerf_rgb.begin() + (n * R + r) * 3,
                         t.nerf_rgb.begin() + (n * R + r) * 3 + 3);
     p.t.mask.push_back(t.mask[n * R + r]);
+    if (in.nerf_depth) p.t.nerf_depth.push_back(t.nerf_depth[n * R + r]);
   }
   p.t.depth = {t.depth[r]};
   p.t.acc = {t.acc[r]};
-  const double sizes[5] = {3.0 * R, 3.0 * N * R, 1.0 * N * R, 1.0 * R, 1.0 * R};
-  for (int k = 0; k < 5; ++k) p.weights[k] = 1.0 / sizes[k];
+  const double sizes[6] = {3.0 * R, 3.0 * N * R, 1.0 * N * R, 1.0 * R, 1.0 * R, 1.0 * N * R};
+  for (int k = 0; k < 6; ++k) p.weights[k] = 1.0 / sizes[k];
   return p;
 }
 
@@ -123,11 +127,13 @@ inline double ray_loss(const RayProblem& p) {
   };
   return p.weights[0] * sq(o.rgb, p.t.rgb) + p.weights[1] * sq(o.nerf_rgb, p.t.nerf_rgb) +
          p.weights[2] * sq(o.mask, p.t.mask) + p.weights[3] * sq(o.depth, p.t.depth) +
-         p.weights[4] * sq(o.acc, p.t.acc);
+         p.weights[4] * sq(o.acc, p.t.acc) +
+         (p.in.nerf_depth ? p.weights[5] * sq(o.nerf_depth, p.t.nerf_depth) : 0.0);
 }
 
 struct DeviceRender {
   std::vector<float> rgb, nerf_rgb, mask, depth, acc, grad_raw;
+  std::vector<float> nerf_depth;  // only when the input asks for it
 };
 
 // Builds render_composite + the five-term loss on the device, runs forward and backward.
@@ -144,17 +150,24 @@ inline DeviceRender run_device_render(const RenderRefInput& in, const RenderTarg
   o.rgb_sigmoid = in.rgb_sigmoid;
   o.blend_sigmoid = in.blend_sigmoid;
   o.hard_blend = in.hard_blend;
+  o.blend_eps = static_cast<float>(in.blend_eps);
+  o.alpha_full_sum = in.alpha_full_sum;
+  o.no_blend = in.no_blend;
+  o.nerf_depth = in.nerf_depth;
   RenderOutputs out = render_composite(raw, delta, z, noise, o);
-  const std::vector<Tensor> outs = {out.rgb, out.nerf_rgb, out.mask, out.depth, out.acc};
-  const std::vector<const std::vector<double>*> targets = {&t.rgb, &t.nerf_rgb, &t.mask,
-                                                           &t.depth, &t.acc};
+  std::vector<Tensor> outs = {out.rgb, out.nerf_rgb, out.mask, out.depth, out.acc};
+  std::vector<const std::vector<double>*> targets = {&t.rgb, &t.nerf_rgb, &t.mask, &t.depth, &t.acc};
+  if (in.nerf_depth) {
+    outs.push_back(out.nerf_depth);
+    targets.push_back(&t.nerf_depth);
+  }
   std::vector<Tensor> terms, target_tensors;
   for (const Tensor& x : outs) {
     g.keep(x);
     target_tensors.push_back(g.input(x.info().name + ".target", x.shape()));
     terms.push_back(mse(x, target_tensors.back()));
   }
-  g.set_loss(weighted_sum(terms, {1, 1, 1, 1, 1}));
+  g.set_loss(weighted_sum(terms, std::vector<float>(terms.size(), 1.0f)));
   ExecutorOptions eo;
   eo.check_finite = check_finite;
   Executor ex(runtime(), g, eo);
@@ -171,6 +184,7 @@ inline DeviceRender run_device_render(const RenderRefInput& in, const RenderTarg
   d.mask = ex.get(out.mask);
   d.depth = ex.get(out.depth);
   d.acc = ex.get(out.acc);
+  if (in.nerf_depth) d.nerf_depth = ex.get(out.nerf_depth);
   d.grad_raw = ex.get_grad(raw);
   return d;
 }
@@ -200,6 +214,7 @@ inline void expect_forward_close(const DeviceRender& d, const RenderRefInput& in
   expect_close(d.mask, o.mask, atol, rtol, what + " mask");
   expect_close(d.depth, o.depth, atol * zmax, rtol, what + " depth");
   expect_close(d.acc, o.acc, atol, rtol, what + " acc");
+  if (in.nerf_depth) expect_close(d.nerf_depth, o.nerf_depth, atol * zmax, rtol, what + " nerf_depth");
 }
 
 // Gradient: the device d loss / d raw against float64 central differences of

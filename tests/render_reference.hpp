@@ -15,10 +15,14 @@ struct RenderRefInput {
   std::vector<double> z;      // [R, S]
   std::vector<double> noise;  // empty or [N, R, S]
   bool rgb_sigmoid = true, blend_sigmoid = true, hard_blend = false;
+  // The reference code's conventions (RenderOptions): blend epsilon, alpha_full as the sum
+  // of alpha_n b_n, no blending at all (b_n = 1), and the per-NeRF depth output.
+  double blend_eps = 1e-6;
+  bool alpha_full_sum = false, no_blend = false, nerf_depth = false;
 };
 
 struct RenderRefOutput {
-  std::vector<double> rgb, nerf_rgb, mask, depth, acc;
+  std::vector<double> rgb, nerf_rgb, mask, depth, acc, nerf_depth;
 };
 
 inline double ref_sigmoid(double x) { return 1.0 / (1.0 + std::exp(-x)); }
@@ -32,6 +36,7 @@ inline RenderRefOutput render_reference(const RenderRefInput& in) {
   out.mask.assign(N * R, 0.0);
   out.depth.assign(R, 0.0);
   out.acc.assign(R, 0.0);
+  out.nerf_depth.assign(N * R, 0.0);
   std::vector<double> Tn(N), alpha(N), blend(N), c(N * 3);
   for (int r = 0; r < R; ++r) {
     double T = 1.0;
@@ -43,7 +48,7 @@ inline RenderRefOutput render_reference(const RenderRefInput& in) {
         const double sigma = std::max(0.0, p[3] + (in.noise.empty() ? 0.0 : in.noise[at]));
         const double d = in.delta[per_nerf_delta ? at : static_cast<size_t>(r) * S + i];
         alpha[n] = 1.0 - std::exp(-sigma * d);
-        blend[n] = in.blend_sigmoid ? ref_sigmoid(p[4]) : p[4];
+        blend[n] = in.no_blend ? 1.0 : in.blend_sigmoid ? ref_sigmoid(p[4]) : p[4];
         for (int k = 0; k < 3; ++k) c[n * 3 + k] = in.rgb_sigmoid ? ref_sigmoid(p[k]) : p[k];
       }
       if (in.hard_blend) {
@@ -53,17 +58,21 @@ inline RenderRefOutput render_reference(const RenderRefInput& in) {
       }
       double bsum = 0;
       for (double b : blend) bsum += b;
+      const auto normalised = [&](int n) { return in.no_blend ? 1.0 : blend[n] / (bsum + in.blend_eps); };
       double keep = 1.0;  // prod_n (1 - alpha_n b_n)
+      double sum_ab = 0.0;
       for (int n = 0; n < N; ++n) {
-        const double b = blend[n] / (bsum + 1e-6);
+        const double b = normalised(n);
         keep *= 1.0 - alpha[n] * b;
+        sum_ab += alpha[n] * b;
+        out.nerf_depth[n * R + r] += Tn[n] * alpha[n] * in.z[r * S + i];
         for (int k = 0; k < 3; ++k) out.rgb[r * 3 + k] += T * alpha[n] * b * c[n * 3 + k];
         for (int k = 0; k < 3; ++k)
           out.nerf_rgb[(n * R + r) * 3 + k] += Tn[n] * alpha[n] * c[n * 3 + k];
         Tn[n] *= 1.0 - alpha[n] + 1e-10;
       }
-      const double alpha_full = 1.0 - keep;
-      for (int n = 0; n < N; ++n) out.mask[n * R + r] += T * alpha_full * blend[n] / (bsum + 1e-6);
+      const double alpha_full = in.alpha_full_sum ? sum_ab : 1.0 - keep;
+      for (int n = 0; n < N; ++n) out.mask[n * R + r] += T * alpha_full * normalised(n);
       out.depth[r] += T * alpha_full * in.z[r * S + i];
       out.acc[r] += T * alpha_full;
       T *= keep + 1e-10;

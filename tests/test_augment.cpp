@@ -183,6 +183,13 @@ BOOST_AUTO_TEST_CASE(composite_target) {
   BOOST_TEST(err / n < 3.0);  // bilinear error, as above (silhouette band included)
   // Far from object 1 (both original and warped) the composite is the original frame.
   BOOST_TEST(a.rgb.at(2, 2, 0) == f.rgb.at(2, 2, 0));
+  // Each NeRF's own view (the reference conventions' per-NeRF targets): the frame for the
+  // static NeRF and the unrotated object 2, the whole frame warped by its homography for 1.
+  BOOST_REQUIRE(a.images.size() == 3u);
+  BOOST_TEST(a.images[0].data == f.rgb.data);
+  BOOST_TEST(a.images[2].data == f.rgb.data);
+  BOOST_TEST(a.images[1].data == warp_image(f.rgb, rotation_homography(f.camera, rot)).data);
+  BOOST_TEST(a.images[1].data != f.rgb.data);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -37,6 +37,7 @@
 #include "nova/optim.hpp"
 #include "nova/rays.hpp"
 #include "nova/render.hpp"
+#include "conventions_reference.hpp"
 #include "rays_reference.hpp"
 #include "render_check.hpp"
 
@@ -366,6 +367,83 @@ BOOST_AUTO_TEST_CASE(losses) {
   expect_grad_close(ex.get_grad(tt2), dt2, "d mse / d target");
 }
 
+// refloss.cl: the reference code's loss terms (mask_l1_loss: abs_err_*; masked_mse_area:
+// masked_sq_err_group_*; alpha_loss_outside: alpha_outside_group_*; order_loss: order_*;
+// the last three finished by group_ratio_finish / group_ratio_factor) over 1009 rays, the
+// gradients against their float64 derivatives. Tolerances as the losses case above.
+BOOST_AUTO_TEST_CASE(reference_losses) {
+  const size_t N = 3, K = 3, S = 3;
+  const float w[4] = {0.7f, 1.3f, 0.4f, 2.1f};
+  const auto mtarget = random_floats(N * kRows, 0, 1, 191), mpred = random_floats(N * kRows, 0, 1, 192);
+  const auto pred = random_floats(N * kRows * K, 0, 1, 193), target = random_floats(N * kRows * K, 0, 1, 194);
+  auto mask = random_floats(N * kRows, 0, 1, 195);
+  for (float& m : mask) m = m < 0.4f ? 0.0f : m < 0.8f ? 1.0f : m;
+  const auto araw = smooth_raw(N, kRows * S, 196);
+  const auto delta = random_floats(kRows * S, 0.05f, 0.5f, 197);
+  const auto depth = random_floats(N * kRows, 0, 1, 198);
+
+  Graph g;
+  Tensor tmp = g.input("mpred", Shape{N, kRows}, true), tmt = g.input("mtarget", Shape{N, kRows});
+  Tensor tp = g.input("pred", Shape{N, kRows, K}, true), tt = g.input("target", Shape{N, kRows, K}),
+         tm = g.input("mask", Shape{N, kRows});
+  Tensor ta = g.input("alpha_raw", Shape{N, kRows * S, 5}, true), td = g.input("delta", Shape{kRows, S});
+  Tensor tdp = g.input("depth", Shape{N, kRows}, true);
+  const Tensor terms[4] = {mask_l1_loss(tmp, tmt), masked_mse_area(tp, tt, tm),
+                           alpha_loss_outside(ta, td, tm), order_loss(tdp, tm)};
+  for (const Tensor& x : terms) g.keep(x);
+  g.set_loss(weighted_sum({terms[0], terms[1], terms[2], terms[3]}, {w[0], w[1], w[2], w[3]}));
+  Executor ex(rt(), g);
+  ex.set(tmp, mpred);
+  ex.set(tmt, mtarget);
+  ex.set(tp, pred);
+  ex.set(tt, target);
+  ex.set(tm, mask);
+  ex.set(ta, araw);
+  ex.set(td, delta);
+  ex.set(tdp, depth);
+  ex.forward();
+  ex.backward();
+  const double ref[4] = {ref_mask_l1(mpred, mtarget, N, kRows), ref_mse_area(pred, target, mask, N, kRows, K),
+                         ref_alpha_outside(araw, delta, mask, {}, N, kRows, S), ref_order(depth, mask, N, kRows)};
+  const char* names[4] = {"mask_l1_loss", "masked_mse_area", "alpha_loss_outside", "order_loss"};
+  for (int k = 0; k < 4; ++k) expect_close(ex.get(terms[k]), {ref[k]}, 1e-9, 1e-5, names[k]);
+
+  std::vector<double> dm(mpred.size());
+  for (size_t e = 0; e < dm.size(); ++e) {
+    const double d = double(mpred[e]) - mtarget[e];
+    dm[e] = w[0] * (d > 0 ? 1.0 : d < 0 ? -1.0 : 0.0) / double(kRows);
+  }
+  expect_grad_close(ex.get_grad(tmp), dm, "d mask_l1_loss / d mask");
+  auto dp = ref_mse_area_grad(pred, target, mask, N, kRows, K);
+  for (double& x : dp) x *= w[1];
+  expect_grad_close(ex.get_grad(tp), dp, "d masked_mse_area / d pred");
+  auto da = ref_alpha_outside_grad(araw, delta, mask, N, kRows, S);
+  for (double& x : da) x *= w[2];
+  expect_grad_close(ex.get_grad(ta), da, "d alpha_loss_outside / d raw");
+  auto dd = ref_order_grad(depth, mask, N, kRows);
+  for (double& x : dd) x *= w[3];
+  expect_grad_close(ex.get_grad(tdp), dd, "d order_loss / d depth");
+}
+
+// render.cl with the reference code's options (RenderOptions: blend epsilon 1e-8, alpha_full
+// as a sum, nerf_depth; and plain compositing), 1009 rays. Tolerances as the render case.
+BOOST_AUTO_TEST_CASE(render_reference_options) {
+  RenderRefInput in = random_render_case(2, static_cast<int>(kRows), 4, 5, false, true, 161);
+  in.blend_eps = 1e-8;
+  in.alpha_full_sum = true;
+  in.nerf_depth = true;
+  RenderTargets t = random_targets(in, 162);
+  DeviceRender d = run_device_render(in, t);
+  expect_forward_close(d, in, 2e-6, 1e-5, "render, reference options");
+  expect_gradient_close(d, in, t, 1e-4, 1e-3, "render, reference options");
+  RenderRefInput plain = random_render_case(1, static_cast<int>(kRows), 4, 5, false, true, 163);
+  plain.no_blend = true;
+  t = random_targets(plain, 164);
+  d = run_device_render(plain, t);
+  expect_forward_close(d, plain, 2e-6, 1e-5, "render, plain");
+  expect_gradient_close(d, plain, t, 1e-4, 1e-3, "render, plain");
+}
+
 // optim.cl: adam_step over 1009 parameters, two steps, against PyTorch's formulation in
 // float64. Tolerance: each update is a few float32 operations on O(lr) values, rtol 1e-5 of
 // the parameter plus 1e-6 of the learning rate.
@@ -611,6 +689,8 @@ BOOST_AUTO_TEST_CASE(every_kernel_ran_at_an_odd_size,
                          utf::depends_on("odd_sizes/losses") *
                          utf::depends_on("odd_sizes/optimiser") *
                          utf::depends_on("odd_sizes/render") *
+                         utf::depends_on("odd_sizes/reference_losses") *
+                         utf::depends_on("odd_sizes/render_reference_options") *
                          utf::depends_on("odd_sizes/sampling") *
                          utf::depends_on("odd_sizes/own_gemm_kernels") *
                          utf::depends_on("odd_sizes/depth_loss_kernels")) {

@@ -203,7 +203,7 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1}));
   s->pack_static = new_select(c.occupancy, {0});
   Tensor raw = static_raw(smp.positions[0], smp.viewdirs[0], scene_field(c.field, geo), s->pack_static);
-  RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
+  RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, pretrain_render_options(c.conventions));
   Tensor rgb_loss = pretrain_rgb_loss(out.rgb, s->target_rgb);
   s->psnr_mse = rgb_loss;
   s->terms = {{"static_rgb", rgb_loss}};
@@ -228,6 +228,8 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->times = g.input("times", per_group(static_cast<size_t>(K), R * S, 1));
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   s->target_masks = g.input("target_masks", Shape{N, R});
+  if (c.conventions.nerf_rgb_area && c.weights.nerf_rgb > 0.0f)
+    s->target_nerf_rgb = g.input("target_nerf_rgb", Shape{N, R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1, K}));
   const FieldConfig field = scene_field(c.field, geo);
@@ -237,12 +239,14 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
   Tensor raw_objects = object_raw(smp.positions[1], s->times, field, s->pack_objects);
   Tensor raw = stack({raw_static, raw_objects});
-  RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise);
+  const RenderOptions ro = joint_render_options(c.conventions, c.weights);
+  RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);
   NovelViewLoss l = novel_view_loss(out, raw, smp.delta, s->noise,
-                                    {s->target_rgb, s->target_masks}, c.weights);
+                                    {s->target_rgb, s->target_masks, s->target_nerf_rgb}, c.weights,
+                                    ro, c.conventions);
   for (auto [name, t] : {std::pair<const char*, Tensor>{"full_rgb", l.full_rgb}, {"nerf_rgb", l.nerf_rgb},
                          {"mask", l.mask}, {"blending", l.blending}, {"alpha", l.alpha},
-                         {"sparsity", l.sparsity}})
+                         {"sparsity", l.sparsity}, {"order", l.order}})
     if (t.valid()) s->terms.emplace_back(name, t);
   s->loss = with_distortion_term(*s, c, raw, smp, s->target_masks,
                                  with_depth_term(*s, c, geo, out.depth, l.total));

@@ -8,7 +8,8 @@ namespace nova {
 
 NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor delta,
                               Tensor noise, const NovelViewTargets& targets,
-                              const NovelViewLossWeights& w, const RenderOptions& options) {
+                              const NovelViewLossWeights& w, const RenderOptions& options,
+                              const LossConventions& cv) {
   NovelViewLoss l;
   std::vector<Tensor> terms;
   std::vector<float> weights;
@@ -19,19 +20,58 @@ NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor 
     weights.push_back(weight);
   };
   add(l.full_rgb, w.full_rgb, [&] { return mse(rendered.rgb, targets.rgb); });
-  add(l.nerf_rgb, w.nerf_rgb,
-      [&] { return masked_mse(rendered.nerf_rgb, targets.rgb, targets.masks); });
-  add(l.mask, w.mask, [&] { return mse(rendered.mask, targets.masks); });
+  add(l.nerf_rgb, w.nerf_rgb, [&] {
+    if (!cv.nerf_rgb_area) return masked_mse(rendered.nerf_rgb, targets.rgb, targets.masks);
+    const Tensor target = targets.nerf_rgb.valid() ? targets.nerf_rgb : targets.rgb;
+    return masked_mse_area(rendered.nerf_rgb, target, targets.masks);
+  });
+  add(l.mask, w.mask, [&] {
+    return cv.mask_l1 ? mask_l1_loss(rendered.mask, targets.masks) : mse(rendered.mask, targets.masks);
+  });
   add(l.blending, w.blending, [&] { return blending_loss(raw, options.blend_sigmoid); });
   // Without an object NeRF there is nothing to push outside a mask.
   const size_t nerfs = rendered.mask.shape()[0];
-  add(l.alpha, nerfs > 1 ? w.alpha : 0.0f,
-      [&] { return alpha_loss(raw, delta, targets.masks, noise, options.blend_sigmoid); });
+  add(l.alpha, nerfs > 1 ? w.alpha : 0.0f, [&] {
+    return cv.alpha_outside ? alpha_loss_outside(raw, delta, targets.masks, noise, options.blend_sigmoid)
+                            : alpha_loss(raw, delta, targets.masks, noise, options.blend_sigmoid);
+  });
   add(l.sparsity, nerfs > 1 ? w.sparsity : 0.0f,
       [&] { return sparsity_loss(raw, delta, targets.masks, noise); });
+  add(l.order, nerfs > 1 ? w.order : 0.0f, [&] {
+    if (!rendered.nerf_depth.valid())
+      throw Error("novel_view_loss: the order loss needs nerf_depth (RenderOptions::nerf_depth)",
+                  kExitInternal);
+    return order_loss(rendered.nerf_depth, targets.masks);
+  });
   if (terms.empty()) throw Error("novel_view_loss: every loss weight is 0", kExitUsage);
   l.total = weighted_sum(terms, weights);
   return l;
+}
+
+LossConventions reference_conventions() {
+  LossConventions c;
+  c.mask_l1 = true;
+  c.nerf_rgb_area = true;
+  c.alpha_outside = true;
+  c.mask_sum = true;
+  c.blend_eps = 1e-8f;
+  c.pretrain_plain = true;
+  return c;
+}
+
+RenderOptions joint_render_options(const LossConventions& c, const NovelViewLossWeights& w) {
+  RenderOptions o;
+  o.blend_eps = c.blend_eps;
+  o.alpha_full_sum = c.mask_sum;
+  o.nerf_depth = w.order > 0.0f;
+  return o;
+}
+
+RenderOptions pretrain_render_options(const LossConventions& c) {
+  RenderOptions o;
+  o.blend_eps = c.blend_eps;
+  o.no_blend = c.pretrain_plain;
+  return o;
 }
 
 Tensor pretrain_rgb_loss(Tensor rgb, Tensor target, Tensor background) {

@@ -1,4 +1,5 @@
 // The compositing render op: N NeRFs along shared samples, blended per sample (render.cl).
+#include <charconv>
 #include <sstream>
 
 #include "nova/executor.hpp"
@@ -23,6 +24,7 @@ class RenderCompositeOp final : public Op {
     ctx.launch("render", "render_forward", options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(noise_ ? ctx.in(3) : ctx.in(0))
         .arg(ctx.out(0)).arg(ctx.out(1)).arg(ctx.out(2)).arg(ctx.out(3)).arg(ctx.out(4))
+        .arg(o_.nerf_depth ? ctx.out(5) : ctx.out(0))
         .arg(detail::u32(rays_, "rays")).arg(detail::u32(samples_, "samples"))
         .arg(detail::u32(channels_, "channels")).arg(delta_stride())
         .arg(static_cast<int>(noise_))
@@ -35,15 +37,17 @@ class RenderCompositeOp final : public Op {
     // Missing upstream gradients are zero: a flag per output, and any valid buffer in the
     // argument slot (the kernel never reads it).
     int mask = 0;
-    cl_mem g[5];
-    for (size_t k = 0; k < 5; ++k) {
+    cl_mem g[6];
+    const size_t outputs = o_.nerf_depth ? 6 : 5;
+    g[5] = ctx.in(0);
+    for (size_t k = 0; k < outputs; ++k) {
       g[k] = ctx.grad_out(k);
       if (g[k]) mask |= 1 << k;
       else g[k] = ctx.in(0);
     }
     ctx.launch("render", "render_backward", options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(noise_ ? ctx.in(3) : ctx.in(0))
-        .arg(g[0]).arg(g[1]).arg(g[2]).arg(g[3]).arg(g[4]).arg(g_raw).arg(ctx.workspace())
+        .arg(g[0]).arg(g[1]).arg(g[2]).arg(g[3]).arg(g[4]).arg(g[5]).arg(g_raw).arg(ctx.workspace())
         .arg(detail::u32(rays_, "rays")).arg(detail::u32(samples_, "samples"))
         .arg(detail::u32(channels_, "channels")).arg(delta_stride())
         .arg(static_cast<int>(noise_)).arg(mask).arg(static_cast<int>(ctx.accumulate_in(0)))
@@ -78,6 +82,17 @@ std::string render_program_options(size_t nerfs, const RenderOptions& o) {
   std::ostringstream s;
   s << "-DNERFS=" << nerfs << " -DRGB_SIGMOID=" << o.rgb_sigmoid
     << " -DBLEND_SIGMOID=" << o.blend_sigmoid << " -DHARD_BLEND=" << o.hard_blend;
+  // The conventions beyond nova's own are named only when set: nova's programs keep their
+  // options (and source after preprocessing) unchanged.
+  const RenderOptions plain;
+  if (o.blend_eps != plain.blend_eps) {
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, o.blend_eps);
+    s << " -DBLEND_EPS=" << std::string(buf, r.ptr) << "f";
+  }
+  if (o.alpha_full_sum) s << " -DALPHA_FULL_SUM=1";
+  if (o.no_blend) s << " -DNO_BLEND=1";
+  if (o.nerf_depth) s << " -DNERF_DEPTH=1";
   return s.str();
 }
 
@@ -111,12 +126,19 @@ RenderOutputs render_composite(Tensor raw, Tensor delta, Tensor z, Tensor noise,
   o.mask = g.activation(base + ".mask", Shape{nerfs, rays});
   o.depth = g.activation(base + ".depth", Shape{rays});
   o.acc = g.activation(base + ".acc", Shape{rays});
+  std::vector<Tensor> outputs = {o.rgb, o.nerf_rgb, o.mask, o.depth, o.acc};
+  if (options.nerf_depth) {
+    o.nerf_depth = g.activation(base + ".nerf_depth", Shape{nerfs, rays});
+    outputs.push_back(o.nerf_depth);
+  }
+  if (!(options.blend_eps > 0.0f) && !options.no_blend)
+    bad("the blend epsilon must be positive, got " + std::to_string(options.blend_eps));
   std::vector<Tensor> inputs = {raw, delta, z};
   if (has_noise) inputs.push_back(noise);
   g.add(std::make_unique<RenderCompositeOp>(nerfs, rays, samples, channels,
                                             dn != rays_samples,
                                             has_noise, options),
-        inputs, {o.rgb, o.nerf_rgb, o.mask, o.depth, o.acc});
+        inputs, outputs);
   return o;
 }
 

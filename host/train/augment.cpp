@@ -91,11 +91,13 @@ AugmentedFrame augment_frame(const Frame& frame,
   a.masks = frame.masks;
   a.cameras.assign(size_t(1 + k_objects), frame.camera);
   a.valid.assign(size_t(1 + k_objects), Image8(frame.rgb.width, frame.rgb.height, 1, 255));
+  a.images.assign(size_t(1 + k_objects), frame.rgb);
   for (int k = 1; k <= k_objects; ++k) {
     if (!rotations[k - 1]) continue;
     const auto h = rotation_homography(frame.camera, *rotations[k - 1]);
     a.cameras[k] = rotate_camera(frame.camera, *rotations[k - 1]);
-    const Image8 img = warp_image(frame.rgb, h);
+    a.images[k] = warp_image(frame.rgb, h);
+    const Image8& img = a.images[k];
     a.masks[k] = warp_image(frame.masks[k], h, 0, &a.valid[k]);
     // Warped object over the composite so far, by its (fractional) warped mask; the
     // background loses every pixel the warped object covers (mask >= 0.5), as the

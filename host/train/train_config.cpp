@@ -95,6 +95,25 @@ ConfigOption bool_option(std::string key, std::string help, F field) {
           [field, key](TrainConfig& c, const std::string& v) { field(c) = parse_bool(key, v); }};
 }
 
+// A switch between nova's own convention (false) and the reference code's (true), written as
+// one of two words; `before` is nova's word (what a run file without the key meant).
+template <class F>
+ConfigOption convention_option(std::string key, std::string help, std::string nova_word,
+                               std::string reference_word, F field) {
+  ConfigOption o{key, std::move(help),
+                 [field, nova_word, reference_word](const TrainConfig& c) {
+                   return field(const_cast<TrainConfig&>(c)) ? reference_word : nova_word;
+                 },
+                 [field, key, nova_word, reference_word](TrainConfig& c, const std::string& v) {
+                   const std::string t = trim(v);
+                   if (t == nova_word) field(c) = false;
+                   else if (t == reference_word) field(c) = true;
+                   else bad_value(key, v, "is not one of " + nova_word + ", " + reference_word);
+                 }};
+  o.before = nova_word;
+  return o;
+}
+
 std::vector<ConfigOption> make_options() {
   constexpr long kBig = 100000000;
   std::vector<ConfigOption> o;
@@ -181,6 +200,22 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.weights.alpha; }));
   o.push_back(float_option("w-sparsity", "weight of the L1 on object alpha inside its mask (one compact surface per ray; not in the reference)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.weights.sparsity; }));
+  o.push_back(float_option("w-order", "weight of the order loss: each object NeRF's depth on background rays is the static NeRF's (the reference's 0.1)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.weights.order; }));
+  o.back().before = "0";
+  o.push_back(convention_option("mask-loss", "mask loss: mse (mean square over NeRFs and rays) or l1 (per NeRF the mean |M_n - m_n| over rays, summed: the reference code's)",
+                                "mse", "l1", [](TrainConfig& c) -> bool& { return c.conventions.mask_l1; }));
+  o.push_back(convention_option("nerf-rgb-loss", "per-NeRF RGB loss: mean (masked square error over N R 3, one target colour) or area (per NeRF over its mask's area, each NeRF against its own, on augmented steps warped, view: the reference code's)",
+                                "mean", "area", [](TrainConfig& c) -> bool& { return c.conventions.nerf_rgb_area; }));
+  o.push_back(convention_option("alpha-loss", "alpha loss: weighted (alpha + blend weighted by 1 - mask, over K R S) or outside (per object the means of blend and alpha over the rays whose mask is not 1: the reference code's)",
+                                "weighted", "outside", [](TrainConfig& c) -> bool& { return c.conventions.alpha_outside; }));
+  o.push_back(convention_option("mask-render", "opacity of a sample in the rendered masks, depth and acc: union (1 - prod_n (1 - alpha_n b_n)) or sum (sum_n alpha_n b_n: the reference code's)",
+                                "union", "sum", [](TrainConfig& c) -> bool& { return c.conventions.mask_sum; }));
+  o.push_back(float_option("blend-eps", "epsilon of the blend normalisation b_n / (sum b + eps) in training (1e-6; the reference code's 1e-8)", 1e-30, 1.0,
+                           [](TrainConfig& c) -> float& { return c.conventions.blend_eps; }));
+  o.back().before = "1e-06";
+  o.push_back(convention_option("pretrain-render", "static pretraining rendered as blend (through the blend normalisation) or plain (a plain NeRF, no blend: the reference code's)",
+                                "blend", "plain", [](TrainConfig& c) -> bool& { return c.conventions.pretrain_plain; }));
   o.push_back(float_option("w-distortion", "weight of the distortion loss: each object NeRF's weight spread along the rays of its mask (streaks; joint training)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_distortion; }));
   o.push_back(bool_option("static-background-only", "joint training: the static NeRF learns from background pixels only (object pixels send it no gradient; not in the reference)",
@@ -227,6 +262,9 @@ TrainConfig preset_config(const std::string& name) {
   TrainConfig c;  // the defaults are the reference
   if (name == "reference") {
     c.preset = "reference";
+    // The public reference code's conventions, item by item (README, "Loss conventions").
+    c.conventions = reference_conventions();
+    c.weights.order = 0.1f;
     return c;
   }
   if (name != "quick") throw Error("option 'preset': '" + name + "' is not one of quick, reference");
@@ -300,7 +338,7 @@ void validate(const TrainConfig& c) {
     throw Error("option 'skip': " + std::to_string(c.field.skip) + " must be below depth " +
                 std::to_string(c.field.depth));
   const NovelViewLossWeights& w = c.weights;
-  if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha <= 0)
+  if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");
   if (c.pretrain_steps + static_cast<long>(c.steps) <= 0)
     throw Error("options 'pretrain-steps' and 'steps': both are 0, nothing to train");

@@ -126,6 +126,9 @@ void Trainer::train_step(bool log, TrainProgress& p) {
                          (phase_step - c.augment_start) % c.augment_every == 0;
   PixelBatch batch;
   std::vector<Camera> cameras(static_cast<size_t>(N), frame.camera);
+  // The image each NeRF's own target colour comes from (the per-NeRF RGB loss under the
+  // reference conventions): the frame, or on an augmented step each object's warped view.
+  std::vector<Image8> nerf_images;
   bool drawn = false;
   // Two objects turned in opposite directions can leave no pixel that both warps cover
   // (a 20 degree turn shifts a 160 px wide image by ~64 px): draw new turns a few times,
@@ -143,6 +146,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     if (usable < static_cast<size_t>(c.rays) / 4) continue;
     batch = draw_pixels(af.rgb, af.masks, regions, c.rays, rng_);
     cameras = af.cameras;
+    if (graph_->target_nerf_rgb.valid()) nerf_images = std::move(af.images);
     drawn = true;
   }
   if (!drawn && joint) {
@@ -178,6 +182,17 @@ void Trainer::train_step(bool log, TrainProgress& p) {
       }
     exec_->set(graph_->target_depth, target);
     exec_->set(graph_->depth_valid, valid);
+  }
+  if (graph_->target_nerf_rgb.valid()) {
+    std::vector<float> target(static_cast<size_t>(N) * R * 3);
+    for (size_t n = 0; n < static_cast<size_t>(N); ++n) {
+      const Image8& img = nerf_images.empty() ? frame.rgb : nerf_images[n];
+      for (size_t r = 0; r < R; ++r) {
+        const int x = static_cast<int>(batch.pixels[2 * r]), y = static_cast<int>(batch.pixels[2 * r + 1]);
+        for (int k = 0; k < 3; ++k) target[(n * R + r) * 3 + k] = img.at(x, y, k) / 255.0f;
+      }
+    }
+    exec_->set(graph_->target_nerf_rgb, target);
   }
   if (joint) {
     exec_->set(graph_->target_masks, batch.masks);

@@ -45,6 +45,8 @@ struct AugmentedFrame {
   std::vector<Image8> masks;   // 1 + K: background with warped objects removed, warped objects
   std::vector<Camera> cameras; // per NeRF: 0 unchanged, k rotated (or unchanged)
   std::vector<Image8> valid;   // per NeRF: where the warp had source pixels (0: all 255)
+  std::vector<Image8> images;  // per NeRF: the frame as its camera sees it (0: the frame, k:
+                               // the frame warped with object k's homography, or the frame)
 };
 
 // Rotates the camera of each object k with rotations[k - 1] (std::nullopt: unchanged).

@@ -65,6 +65,29 @@ Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor 
                        Tensor valid, Tensor masks, Tensor noise = {}, float margin = 0.05f,
                        size_t first_nerf = 1, float behind = 0.0f);
 
+// Per-NeRF mask loss of the reference code: sum over NeRFs n of the mean over rays r of
+// |mask_n(r) - target_n(r)|. mask [N, R] (render_composite's), target [N, R] (data).
+Tensor mask_l1_loss(Tensor mask, Tensor target);
+
+// Per-NeRF masked RGB loss of the reference code: sum over groups g of
+// sum_{r,k} mask_g(r) (pred - target)^2 / (sum_r mask_g(r) + 1e-8) / K: each NeRF's squared
+// error over its mask's area. pred [G, R, K]; target [G, R, K] (each group its own target)
+// or [R, K] (shared); mask [G, R]. target and mask are data.
+Tensor masked_mse_area(Tensor pred, Tensor target, Tensor mask);
+
+// Alpha loss of the reference code: for each object NeRF n >= 1, over the rays whose mask
+// is not exactly 1 (and all their samples), the mean of blend_n plus the mean of alpha_n;
+// summed over the objects (an object with no such ray adds 0). Arguments as alpha_loss.
+Tensor alpha_loss_outside(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {},
+                          bool blend_sigmoid = true);
+
+// Order loss of the reference code: the object NeRFs' depth on background rays is the
+// static NeRF's. nerf_depth [N, R] (render_composite's, each NeRF alone), masks [N, R] (row
+// 0 the background, data): sum over n >= 1 and rays r of masks_0(r) |depth_n(r) - depth_0(r)|,
+// divided by (sum_r masks_0(r) + 1e-8) and by R (the reference's img2mae divides by the last
+// dimension, which for [K, R] depth maps is R). Both depths get a gradient. Needs N >= 2.
+Tensor order_loss(Tensor nerf_depth, Tensor masks);
+
 // The reference code's weights (DESIGN.md, "Loss weights").
 struct NovelViewLossWeights {
   float full_rgb = 3.0f;  // mse(composite rgb, target rgb)
@@ -73,25 +96,57 @@ struct NovelViewLossWeights {
   float blending = 0.1f;  // blending_loss
   float alpha = 0.1f;     // alpha_loss (only built when there is an object NeRF)
   float sparsity = 0.0f;  // sparsity_loss (not in the reference; likewise objects only)
+  float order = 0.0f;     // order_loss (the reference's 0.1; objects only; needs nerf_depth)
 };
+
+// How the terms are normalised and what the renderer gives them. The defaults are nova's
+// own conventions (the quick preset); reference_conventions() gives the public reference
+// code's (the reference preset). README, "Loss conventions".
+struct LossConventions {
+  // Mask loss: mse(M, masks) over all N R values (false), or mask_l1_loss (true).
+  bool mask_l1 = false;
+  // Per-NeRF RGB loss: masked_mse over N R 3 with the one target colour (false), or
+  // masked_mse_area, each NeRF against its own target (NovelViewTargets::nerf_rgb) (true).
+  bool nerf_rgb_area = false;
+  // Alpha loss: alpha_loss, weighted by 1 - mask over K R S (false), or alpha_loss_outside.
+  bool alpha_outside = false;
+  // M_n (and depth, acc): RenderOptions::alpha_full_sum.
+  bool mask_sum = false;
+  // RenderOptions::blend_eps.
+  float blend_eps = 1e-6f;
+  // Static pretraining rendered through the blend normalisation (false) or as a plain NeRF,
+  // RenderOptions::no_blend (true).
+  bool pretrain_plain = false;
+};
+LossConventions reference_conventions();
 
 struct NovelViewTargets {
   Tensor rgb;    // [R, 3] target colour of the (possibly warped) view
   Tensor masks;  // [N, R] masks[0] = background (1 - union of objects), masks[n] = object n
+  // [N, R, 3] each NeRF's own target colour (on augmented steps object n's own warped view):
+  // read by the per-NeRF RGB loss under LossConventions::nerf_rgb_area; invalid: rgb for all.
+  Tensor nerf_rgb{};
 };
 
 struct NovelViewLoss {
   Tensor total;  // scalar weighted sum of the present terms: pass to Graph::set_loss
   // Each term, unweighted (for logs); invalid (Tensor{}) when its weight is 0.
-  Tensor full_rgb, nerf_rgb, mask, blending, alpha, sparsity;
+  Tensor full_rgb, nerf_rgb, mask, blending, alpha, sparsity, order;
 };
 
 // Builds the weighted loss of one render (raw/delta/noise/options: those given to
-// render_composite). Throws when every weight is 0.
+// render_composite) under `conventions`. Throws when every weight is 0, or when the order
+// loss is weighted and `rendered` has no nerf_depth.
 NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor delta,
                               Tensor noise, const NovelViewTargets& targets,
                               const NovelViewLossWeights& weights = {},
-                              const RenderOptions& options = {});
+                              const RenderOptions& options = {},
+                              const LossConventions& conventions = {});
+
+// The render options of joint training under `conventions` (blend_eps, alpha_full_sum, and
+// nerf_depth when `order` is weighted), and of static pretraining (blend_eps, no_blend).
+RenderOptions joint_render_options(const LossConventions& conventions, const NovelViewLossWeights& w);
+RenderOptions pretrain_render_options(const LossConventions& conventions);
 
 // Pretraining of the static NeRF alone (rendered with N = 1): mse of its colour against the
 // target, restricted to background pixels when `background` ([R], 1 = background) is given.

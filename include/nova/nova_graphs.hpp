@@ -45,6 +45,8 @@ struct StepGraph {
   // The targets of the depth and free-space terms (when either is built): minus the disparity
   // per ray, and 1 where it applies (0 on augmented steps, whose warped views have no disparity).
   Tensor target_depth, depth_valid;
+  // [N, R, 3] each NeRF's own target colour: only under LossConventions::nerf_rgb_area.
+  Tensor target_nerf_rgb;
   Tensor loss;
   std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
   Tensor psnr_mse;  // the composite-colour mse the progress PSNR is computed from

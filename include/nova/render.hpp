@@ -25,6 +25,17 @@ struct RenderOptions {
   bool blend_sigmoid = true;
   // Inference only: the static blend is set to 0 wherever an object blend exceeds 0.5.
   bool hard_blend = false;
+  // b_n = blend_n / (sum_m blend_m + blend_eps): nova's 1e-6 by default, the reference code's
+  // 1e-8 under its conventions (LossConventions in losses.hpp).
+  float blend_eps = 1e-6f;
+  // alpha_full_i in mask, depth and acc: 1 - prod_n (1 - alpha_n b_n) (false, the union of
+  // the NeRFs' opacities) or sum_n alpha_n b_n (true, the reference code's weights_full).
+  bool alpha_full_sum = false;
+  // Plain NeRF compositing, no blending (b_n = 1, the blend channel gets no gradient): the
+  // reference code's pretraining of the static NeRF alone (N = 1).
+  bool no_blend = false;
+  // Also render nerf_depth (each NeRF alone, as nerf_rgb): the order loss reads it.
+  bool nerf_depth = false;
 };
 
 struct RenderOutputs {
@@ -33,6 +44,8 @@ struct RenderOutputs {
   Tensor mask;      // [N, R]     M_n = sum_i T_i alpha_full_i b_n,i
   Tensor depth;     // [R]        sum_i T_i alpha_full_i z_i
   Tensor acc;       // [R]        sum_i T_i alpha_full_i (= sum_n M_n)
+  Tensor nerf_depth;  // [N, R]   sum_i T^n_i alpha_n,i z_i, each NeRF alone (only with
+                      //          RenderOptions::nerf_depth; invalid otherwise)
 };
 
 // Renders N = raw.shape[0] NeRFs (1 <= N <= 16; NeRF 0 is the static one).

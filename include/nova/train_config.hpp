@@ -32,6 +32,9 @@ struct TrainConfig {
   int augment_start = 0;         // joint steps before the first augmented one (warm-up)
   float augment_degrees = 20.0f;
   NovelViewLossWeights weights;
+  // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
+  // public reference code's (reference); README, "Loss conventions".
+  LossConventions conventions;
   // Depth up to scale and shift against the scene's disparity maps (disp/), in both phases,
   // as DynamicNeRF (whose code NOVA builds on) does; off without disparity or with 0.
   float w_depth = 0.04f;
