@@ -89,8 +89,7 @@ const Centroid& ViewRenderer::object_centre(int object, double time) {
                 " object NeRF(s)");
   const auto key = std::make_pair(object, time);
   if (const auto it = centres_.find(key); it != centres_.end()) return it->second;
-  Centroid& out = centres_[key];
-  if (!has_objects_) return out;  // a pretraining checkpoint: no object has density
+  if (!has_objects_) return centres_[key];  // a pretraining checkpoint: no object has density
   const FieldConfig f = scene_field(config_.field, geometry_);
   const float bound = f.hash.bound;
   // Which cells to probe: the object's occupied grid cells (its grid holds the maximum over
@@ -146,8 +145,7 @@ const Centroid& ViewRenderer::object_centre(int object, double time) {
   o.ax = geometry_.ax;
   o.ay = geometry_.ay;
   o.ndc_near = 1.0;  // the rays' NDC near plane (RayOptions, InstanceOptions)
-  out = density_centroid(density, G, bound, o);
-  return out;
+  return centres_[key] = density_centroid(density, G, bound, o);
 }
 
 InstancePivot ViewRenderer::pivot_for(const ComposeInstance& inst) {

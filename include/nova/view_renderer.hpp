@@ -128,7 +128,8 @@ class ViewRenderer {
   // render draws of it), or of every cell of a kCentreProbeResolution^3 grid over the field's
   // box where the run has no grid for it or renders skip nothing (set_skip_empty_space). In world (scene processed) coordinates, the compose spec's. Not found where the
   // object has no density at that time, or the run has no trained object NeRFs. Cached per
-  // (object, time); the same run gives the same bits.
+  // (object, time) until set_skip_empty_space changes what is probed; the same run gives
+  // the same bits.
   const Centroid& object_centre(int object, double time);
   static constexpr int kCentreProbeResolution = 64;
   // The instance's pivot: its own, else its object's centre at its time, else the origin.
