@@ -18,10 +18,12 @@ $nova synth --out "$out/scene"
 $nova train --scene "$out/scene" --out "$out/run" --preset quick
 $nova eval --run "$out/run" | tee "$out/eval.txt"
 
-# Three instances: object 1 twice (at two times, one moved up) and object 2 turned.
+# Three instances: object 1 twice (at two times, one moved up) and object 2 turned in place
+# (without pivot= an instance turns about its object's centre; `nova render` prints it).
 cat > "$out/compose.txt" <<'SPEC'
 nova-compose 1
-# p' = R (p - pivot) + pivot + translate; R = Rz Ry Rx in degrees; scene coordinates
+# p' = R (p - pivot) + pivot + translate; R = Rz Ry Rx in degrees; scene coordinates;
+# pivot (if not given): the object's centre at its time
 target three_instances camera=0
 instance object=1 time=-1
 instance object=1 time=0 translate=0,0.25,0.15

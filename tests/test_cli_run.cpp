@@ -12,16 +12,17 @@ namespace {
 
 struct Result {
   int code = -1;
-  std::string err;
+  std::string err, out;
 };
 
 Result nova_cli(const std::string& args, const TempDir& dir) {
-  const std::string err = (dir / "stderr.txt").string();
-  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova " + args + " >/dev/null 2>" + err;
+  const std::string err = (dir / "stderr.txt").string(), out = (dir / "stdout.txt").string();
+  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova " + args + " >" + out + " 2>" + err;
   const int status = std::system(cmd.c_str());
   Result r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.err = read_all(err);
+  r.out = read_all(out);
   return r;
 }
 
@@ -68,6 +69,11 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   BOOST_REQUIRE_MESSAGE(c.code == 0, c.err);
   for (const char* f : {"three.png", "three_depth.png", "three_mask0.png", "three_mask3.png"})
     BOOST_TEST(fs::exists(dir / "comp" / f), f);
+  // Each instance's pivot and where it came from (none is given: the density, or the origin
+  // with a warning where this 9-step run's object has none).
+  for (const char* line : {"target three: instance 1 (object 1, t=-1) pivot (", "target three: instance 3 (object 2, t=0) pivot ("})
+    BOOST_TEST(c.out.find(line) != std::string::npos, line << " in: " << c.out);
+  BOOST_TEST((c.out.find(") from density") != std::string::npos || c.out.find(") from origin") != std::string::npos));
 
   Result e = nova_cli("eval --run " + run, dir);
   BOOST_REQUIRE_MESSAGE(e.code == 0, e.err);

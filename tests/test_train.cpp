@@ -402,6 +402,47 @@ BOOST_AUTO_TEST_CASE(early_termination_runs_one_pass_where_it_does_not_pay) {
   BOOST_TEST(worst_probe <= noise);
 }
 
+// An instance without pivot= turns about its object's centre, found from the trained
+// density (ViewRenderer::object_centre; tests/test_object_centre.cpp checks it on a field of
+// known density). On the skipping run the objects stay faint: their grids mark no cell
+// occupied, so a render that skips empty space draws nothing of them, has no centre for
+// them, and falls back to the scene origin (render and eval warn); the same from a second
+// renderer. With skipping off every cell is probed and the faint haze has a centre.
+BOOST_AUTO_TEST_CASE(default_pivot_falls_back_to_the_origin) {
+  const GridRun& g = grid_run();
+  const Scene& scene = g.scene;
+  const RayGeometry geo = ray_geometry(scene);
+  ViewRenderer r(runtime(), g.config, geo, g.checkpoint), again(runtime(), g.config, geo, g.checkpoint);
+  BOOST_REQUIRE(r.skips_empty_space());
+  for (int k = 1; k <= scene.num_objects; ++k) {
+    BOOST_TEST_CONTEXT("object " << k) {
+      const CheckpointArray& a = g.checkpoint.array(occupancy_array_name(k));
+      OccupancyGrid grid(static_cast<int>(a.shape[0]), scene_field(g.config.field, geo).hash.bound,
+                         g.config.occupancy_alpha);
+      grid.density = a.values;
+      grid.refresh();
+      BOOST_REQUIRE(grid.occupied_fraction() == 0.0);
+      ComposeInstance inst;
+      inst.object = k;
+      inst.time = scene.frames.back().time;
+      inst.rotate_deg = {0, 30, 0};
+      const InstancePivot pv = r.pivot_for(inst);
+      BOOST_TEST(!r.object_centre(k, inst.time).found);
+      BOOST_TEST((pv.from == InstancePivot::From::Origin));
+      BOOST_TEST((pv.pivot == std::array<double, 3>{0, 0, 0}));
+      // An explicit pivot is kept as given.
+      inst.pivot = std::array<double, 3>{0.25, -0.5, -2};
+      const InstancePivot given = r.pivot_for(inst);
+      BOOST_TEST((given.from == InstancePivot::From::Spec));
+      BOOST_TEST((given.pivot == *inst.pivot));
+      inst.pivot.reset();
+      again.set_skip_empty_space(false);
+      const InstancePivot all = again.pivot_for(inst);
+      BOOST_TEST((all.from == InstancePivot::From::Density));
+    }
+  }
+}
+
 BOOST_AUTO_TEST_CASE(mismatched_checkpoints_are_refused) {
   const Scene scene = tiny_scene();
   TempDir dir("mismatch");

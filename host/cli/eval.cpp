@@ -139,7 +139,13 @@ int eval(const Args& args) {
     req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
     req.background = t.background;
     req.hard_blend = blend.composition;
-    for (const ComposeInstance& inst : t.instances) req.instances.push_back(placed_instance(inst));
+    for (const ComposeInstance& inst : t.instances) {
+      const InstancePivot pv = renderer.pivot_for(inst);
+      if (pv.from == InstancePivot::From::Origin)
+        std::cerr << "warning: composition target " << t.name << ": object " << inst.object
+                  << " has no density at t=" << inst.time << "; it turns about the scene origin\n";
+      req.instances.push_back(placed_instance(inst, pv.pivot));
+    }
     const ViewImage img = renderer.render(req);
     const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
     write_png(pictures + "/compose_" + t.name + ".png", out);

@@ -50,6 +50,14 @@ Image8 write_view(const ViewImage& v, const std::string& dir, const std::string&
   return rgb;
 }
 
+// "target NAME: instance 3 (object 2, t=0.5) pivot (x, y, z) from density" (n 0-based).
+std::string describe_pivot(const std::string& target, size_t n, const ComposeInstance& i, const InstancePivot& pv) {
+  char b[160];
+  std::snprintf(b, sizeof b, "instance %zu (object %d, t=%g) pivot (%.6g, %.6g, %.6g) from %s", n + 1, i.object,
+                i.time, pv.pivot[0], pv.pivot[1], pv.pivot[2], pivot_source_name(pv.from));
+  return "target " + target + ": " + b;
+}
+
 }  // namespace
 
 int render(const Args& args) {
@@ -107,7 +115,15 @@ int render(const Args& args) {
       req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
       req.background = t.background;
       req.hard_blend = blend.composition;
-      for (const ComposeInstance& i : t.instances) req.instances.push_back(placed_instance(i));
+      for (size_t n = 0; n < t.instances.size(); ++n) {
+        const ComposeInstance& i = t.instances[n];
+        const InstancePivot pv = renderer.pivot_for(i);
+        std::cout << describe_pivot(t.name, n, i, pv) << "\n";
+        if (pv.from == InstancePivot::From::Origin)
+          std::cerr << "warning: target " << t.name << ", instance " << n + 1 << ": object " << i.object
+                    << " has no density at t=" << i.time << "; it turns about the scene origin\n";
+        req.instances.push_back(placed_instance(i, pv.pivot));
+      }
       frames.push_back(write_view(renderer.render(req), out.path(), t.name, masks));
       std::cerr << "rendered " << t.name << " (" << t.instances.size() << " instances)\n";
       ++views;

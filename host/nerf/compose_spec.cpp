@@ -185,7 +185,7 @@ std::string format_compose_spec(const ComposeSpec& spec) {
     for (const auto& i : t.instances)
       out += "instance object=" + std::to_string(i.object) + " time=" + num(i.time) +
              " rotate=" + triple(i.rotate_deg) + " translate=" + triple(i.translate) +
-             " pivot=" + triple(i.pivot) + "\n";
+             (i.pivot ? " pivot=" + triple(*i.pivot) : std::string()) + "\n";
   }
   return out;
 }
@@ -202,15 +202,23 @@ std::array<double, 9> euler_xyz_deg_to_matrix(const std::array<double, 3>& deg) 
 }
 
 std::array<double, 12> instance_transform(const ComposeInstance& inst) {
+  if (!inst.pivot)
+    throw Error("instance of object " + std::to_string(inst.object) +
+                    " has no pivot: the renderer decides it (ViewRenderer::pivot_for)",
+                kExitInternal);
+  return instance_transform(inst, *inst.pivot);
+}
+
+std::array<double, 12> instance_transform(const ComposeInstance& inst, const std::array<double, 3>& pivot) {
   const auto r = euler_xyz_deg_to_matrix(inst.rotate_deg);
   std::array<double, 12> m{};
   for (int i = 0; i < 3; ++i) {
     double rp = 0;
     for (int j = 0; j < 3; ++j) {
       m[i * 4 + j] = r[i * 3 + j];
-      rp += r[i * 3 + j] * inst.pivot[j];
+      rp += r[i * 3 + j] * pivot[j];
     }
-    m[i * 4 + 3] = inst.pivot[i] + inst.translate[i] - rp;
+    m[i * 4 + 3] = pivot[i] + inst.translate[i] - rp;
   }
   return m;
 }

@@ -6,7 +6,9 @@
 #include <sstream>
 
 #include "nova/error.hpp"
+#include "nova/nova_fields.hpp"
 #include "nova/rays.hpp"
+#include "nova/render.hpp"
 #include "nova/trainer.hpp"
 
 namespace nova {
@@ -57,6 +59,102 @@ PlacedInstance placed_instance(const ComposeInstance& inst) {
   return {inst.object, inst.time, invert_rigid(instance_transform(inst))};
 }
 
+PlacedInstance placed_instance(const ComposeInstance& inst, const std::array<double, 3>& pivot) {
+  return {inst.object, inst.time, invert_rigid(instance_transform(inst, pivot))};
+}
+
+const char* pivot_source_name(InstancePivot::From from) {
+  switch (from) {
+    case InstancePivot::From::Spec: return "spec";
+    case InstancePivot::From::Density: return "density";
+    case InstancePivot::From::Origin: return "origin";
+  }
+  return "?";
+}
+
+// The density probe of object_centre: one object field (weights of one object at a time)
+// on `points` positions at one time each, as the occupancy updater's probe graph.
+struct ViewRenderer::Probe {
+  static constexpr size_t kPoints = 16384;
+  Graph graph;
+  Tensor positions, times, raw;
+  std::unique_ptr<Executor> exec;
+  int loaded = 0;  // the object whose weights the field holds (0: none yet)
+};
+
+const Centroid& ViewRenderer::object_centre(int object, double time) {
+  const int K = geometry_.num_objects;
+  if (object < 1 || object > K)
+    throw Error("object " + std::to_string(object) + " does not exist: the run has " + std::to_string(K) +
+                " object NeRF(s)");
+  const auto key = std::make_pair(object, time);
+  if (const auto it = centres_.find(key); it != centres_.end()) return it->second;
+  if (!has_objects_) return centres_[key];  // a pretraining checkpoint: no object has density
+  const FieldConfig f = scene_field(config_.field, geometry_);
+  const float bound = f.hash.bound;
+  // Which cells to probe: the object's occupied grid cells (its grid holds the maximum over
+  // time, so every cell with density at `time` is among them), or all of a default grid.
+  const OccupancyGrid* grid = grids_ && static_cast<int>(grids_->size()) > object
+                                  ? &(*grids_)[static_cast<size_t>(object)]
+                                  : nullptr;
+  if (grid && grid->resolution <= 1) grid = nullptr;  // a placeholder: no grid for it
+  const int G = grid ? grid->resolution : kCentreProbeResolution;
+  const size_t cells = static_cast<size_t>(G) * G * G;
+  std::vector<size_t> probe;
+  for (size_t c = 0; c < cells; ++c)
+    if (!grid || grid->occupied[c]) probe.push_back(c);
+  std::vector<float> density(cells, -1.0f);  // unprobed: no density
+  if (!probe.empty()) {
+    if (!probe_) {
+      probe_ = std::make_unique<Probe>();
+      const size_t P = Probe::kPoints;
+      probe_->positions = probe_->graph.input("object_positions", Shape{P, 3});
+      probe_->times = probe_->graph.input("object_times", Shape{P, 1});
+      probe_->raw = build_object_fields(probe_->positions, probe_->times, f);
+      probe_->graph.keep(probe_->raw);
+      probe_->exec = std::make_unique<Executor>(rt_, probe_->graph);
+    }
+    Probe& pr = *probe_;
+    if (pr.loaded != object) {
+      for (Tensor p : pr.graph.parameters()) {
+        const CheckpointArray& a = checkpoint_.array(p.info().name);
+        const size_t slice = a.values.size() / static_cast<size_t>(K);
+        pr.exec->set(p, std::vector<float>(a.values.begin() + (object - 1) * slice,
+                                           a.values.begin() + object * slice));
+      }
+      pr.loaded = object;
+    }
+    const size_t P = Probe::kPoints;
+    pr.exec->set(pr.times, std::vector<float>(P, static_cast<float>(time)));
+    std::vector<float> pos(P * 3);
+    for (size_t first = 0; first < probe.size(); first += P) {
+      const size_t n = std::min(P, probe.size() - first);
+      for (size_t i = 0; i < P; ++i) {  // a short last chunk repeats its last cell
+        const auto q = probe_cell_centre(probe[first + std::min(i, n - 1)], G, bound);
+        for (int d = 0; d < 3; ++d) pos[i * 3 + d] = static_cast<float>(q[d]);
+      }
+      pr.exec->set(pr.positions, pos);
+      pr.exec->forward();
+      const std::vector<float> raw = pr.exec->get(pr.raw);
+      // sigma = ReLU(raw) at inference (render.hpp); density_centroid ignores <= 0.
+      for (size_t i = 0; i < n; ++i) density[probe[first + i]] = raw[i * kRawChannels + kRawSigma];
+    }
+  }
+  CentroidOptions o;
+  o.ndc = geometry_.ndc;
+  o.ax = geometry_.ax;
+  o.ay = geometry_.ay;
+  o.ndc_near = 1.0;  // the rays' NDC near plane (RayOptions, InstanceOptions)
+  return centres_[key] = density_centroid(density, G, bound, o);
+}
+
+InstancePivot ViewRenderer::pivot_for(const ComposeInstance& inst) {
+  if (inst.pivot) return {*inst.pivot, InstancePivot::From::Spec};
+  const Centroid& c = object_centre(inst.object, inst.time);
+  if (c.found) return {c.centre, InstancePivot::From::Density};
+  return {{0, 0, 0}, InstancePivot::From::Origin};
+}
+
 struct ViewRenderer::Cached {
   std::unique_ptr<ViewGraph> graph;
   std::unique_ptr<Executor> exec;
@@ -99,7 +197,10 @@ ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeom
 
 ViewRenderer::~ViewRenderer() = default;
 
-void ViewRenderer::set_skip_empty_space(bool on) { grids_ = on ? saved_grids_ : nullptr; }
+void ViewRenderer::set_skip_empty_space(bool on) {
+  if ((grids_ != nullptr) != (on && saved_grids_ != nullptr)) centres_.clear();  // probed other cells
+  grids_ = on ? saved_grids_ : nullptr;
+}
 
 void ViewRenderer::set_early_termination(const EarlyTermination& t) {
   int last = 0;

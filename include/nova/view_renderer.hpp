@@ -13,6 +13,7 @@
 #include "nova/checkpoint.hpp"
 #include "nova/occupancy.hpp"
 #include "nova/compose_spec.hpp"
+#include "nova/object_centre.hpp"
 #include "nova/executor.hpp"
 #include "nova/nova_graphs.hpp"
 #include "nova/train_config.hpp"
@@ -36,8 +37,21 @@ struct PlacedInstance {
 };
 // The scene as trained: every object k at `time`, where it was.
 std::vector<PlacedInstance> scene_instances(int objects, double time);
-// A compose-spec instance: its placement inverted.
+// A compose-spec instance: its placement inverted. The instance must have its pivot (a
+// renderer decides a missing one: ViewRenderer::place).
 PlacedInstance placed_instance(const ComposeInstance& inst);
+// The same, turning about `pivot` whatever the instance says.
+PlacedInstance placed_instance(const ComposeInstance& inst, const std::array<double, 3>& pivot);
+
+// What a compose-spec instance turns about, and where that came from: the spec's pivot=, the
+// object's centre at the instance's time (its density), or the scene origin where the object
+// has no density at that time.
+struct InstancePivot {
+  enum class From { Spec, Density, Origin };
+  std::array<double, 3> pivot{0, 0, 0};
+  From from = From::Spec;
+};
+const char* pivot_source_name(InstancePivot::From from);  // "spec", "density", "origin"
 
 struct ViewRequest {
   Camera camera;
@@ -109,8 +123,22 @@ class ViewRenderer {
   const EarlyTermination& early_termination() const { return termination_; }
   const RenderStats& last_stats() const { return stats_; }
 
+  // The centre of object `object` (1..K) at `time` (object_centre.hpp): the object NeRF's
+  // density probed at the centres of the cells its occupancy grid marks occupied (what a
+  // render draws of it), or of every cell of a kCentreProbeResolution^3 grid over the field's
+  // box where the run has no grid for it or renders skip nothing (set_skip_empty_space). In world (scene processed) coordinates, the compose spec's. Not found where the
+  // object has no density at that time, or the run has no trained object NeRFs. Cached per
+  // (object, time) until set_skip_empty_space changes what is probed; the same run gives
+  // the same bits.
+  const Centroid& object_centre(int object, double time);
+  static constexpr int kCentreProbeResolution = 64;
+  // The instance's pivot: its own, else its object's centre at its time, else the origin.
+  InstancePivot pivot_for(const ComposeInstance& inst);
+  PlacedInstance place(const ComposeInstance& inst) { return placed_instance(inst, pivot_for(inst).pivot); }
+
  private:
   struct Cached;
+  struct Probe;
   Cached& graph_for(bool background, int instances, int rays, bool hard_blend, bool packed);
   // Segment bounds [0, checks..., S] of the passes (just [0, S] when termination is off).
   std::vector<size_t> segments() const;
@@ -125,6 +153,8 @@ class ViewRenderer {
   EarlyTermination termination_;
   RenderStats stats_;
   std::map<std::tuple<bool, int, int, bool, bool>, std::unique_ptr<Cached>> graphs_;
+  std::unique_ptr<Probe> probe_;
+  std::map<std::pair<int, double>, Centroid> centres_;
 };
 
 }  // namespace nova
