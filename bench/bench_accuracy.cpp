@@ -133,6 +133,18 @@ bool finished_run(const std::string& run_dir, const TrainConfig& config, const S
   }
 }
 
+// Small renders drawn larger (nearest neighbour, an integer factor) so that a picture sheet
+// of a tiny scene stays legible.
+Image8 enlarged(const Image8& im) {
+  const int f = im.width >= 128 ? 1 : (127 + im.width) / std::max(1, im.width);
+  if (f == 1) return im;
+  Image8 out(im.width * f, im.height * f, im.channels);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      for (int c = 0; c < im.channels; ++c) out.at(x, y, c) = im.at(x / f, y / f, c);
+  return out;
+}
+
 struct Evaluated {
   SceneResult result;
   Image8 picture;
@@ -187,23 +199,21 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
   const auto keep = [&](size_t i, const std::string& stem, const Image8& out) {
     if (std::find(picks.begin(), picks.end(), i) == picks.end()) return;
     const std::string what = cam0.empty() ? stem : "t = " + std::to_string(shown[i].time_index);
-    tiles.push_back(out);
+    tiles.push_back(enlarged(out));
     captions.push_back(what + " render");
-    tiles.push_back(shown[i].rgb);
+    tiles.push_back(enlarged(shown[i].rgb));
     captions.push_back(what + " truth");
   };
-  const auto count = [&](size_t n) { return [&, n](size_t i, const std::string&, const Image8&) {
-    std::cerr << "\r  evaluated " << i + 1 << "/" << n << std::flush; }; };
-  const auto cam0_count = count(cam0.size()), held_count = count(held.size());
-  const auto cam0_scores = score_views(renderer, scene.num_objects, cam0, false, [&](size_t i, const std::string& s, const Image8& o) {
-    keep(i, s, o);
-    cam0_count(i, s, o);
-  });
-  const auto held_scores = score_views(renderer, scene.num_objects, held, false, [&](size_t i, const std::string& s, const Image8& o) {
-    if (cam0.empty()) keep(i, s, o);
-    held_count(i, s, o);
-  });
-  if (!cam0.empty() || !held.empty()) std::cerr << "\n";
+  const auto score = [&](const std::vector<GroundTruthView>& views, const std::string& what, bool pictured) {
+    const auto s = score_views(renderer, scene.num_objects, views, false, [&](size_t i, const std::string& stem, const Image8& o) {
+      if (pictured) keep(i, stem, o);
+      std::cerr << "\r  evaluated " << i + 1 << "/" << views.size() << " " << what << " views" << std::flush;
+    });
+    if (!views.empty()) std::cerr << "\n";
+    return s;
+  };
+  const auto cam0_scores = score(cam0, "camera-0", true);
+  const auto held_scores = score(held, p.spec.eval_split.empty() ? "held-out" : p.spec.eval_split, cam0.empty());
   const auto compose_scores = score_compose_targets(renderer, scene, true);
   r.eval_s = since(t0);
   if (!cam0_scores.empty()) std::tie(r.cam0_psnr, r.cam0_ssim) = mean_scores(cam0_scores);
@@ -231,7 +241,7 @@ Image8 results_plot(const std::vector<SceneResult>& results, const std::string& 
     bars.push_back(g);
     points.push_back(s);
   }
-  const Image8 a = plot_bar_groups(bars, "PSNR per scene, " + config_text + " (camera 0 at every time; real scenes: held-out views)",
+  const Image8 a = plot_bar_groups(bars, "PSNR per scene (camera 0 at every time; real scenes: held-out views), " + config_text,
                                    "PSNR (dB)");
   const Image8 b = plot_scatter(points, "PSNR against training time", "training time (s)", "PSNR (dB)");
   return stack_images({a, b});

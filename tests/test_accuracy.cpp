@@ -148,7 +148,7 @@ BOOST_AUTO_TEST_CASE(aggregates_per_set) {
 }
 
 BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
-  std::vector<SceneResult> rs = {result("family:1", "dev", 20.12345, 18.5, 17.25, 10.5),
+  std::vector<SceneResult> rs = {result("family:1", "dev", 20.12346, 18.5, 17.25, 10.5),
                                  result("lego", "real", kNaN, 20.47, kNaN, 72.25, "failed: a, \"b\"")};
   rs[0].cam0_ssim = 0.81234;
   rs[0].cam0_views = 24;

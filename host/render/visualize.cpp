@@ -236,10 +236,16 @@ Image8 from_bgr(const cv::Mat& img) {
   return out;
 }
 
+// Text centred on cx, shrunk (down to 60%) to fit the image's width.
 void centred_text(cv::Mat& img, const std::string& t, int cx, int y, double scale, const cv::Scalar& c) {
   int base = 0;
-  const cv::Size sz = cv::getTextSize(t, kFont, scale, 1, &base);
-  cv::putText(img, t, {cx - sz.width / 2, y}, kFont, scale, c, 1, cv::LINE_AA);
+  cv::Size sz = cv::getTextSize(t, kFont, scale, 1, &base);
+  for (const double smallest = scale * 0.6; sz.width > img.cols - 8 && scale > smallest;) {
+    scale *= 0.95;
+    sz = cv::getTextSize(t, kFont, scale, 1, &base);
+  }
+  cv::putText(img, t, {std::max(2, std::min(cx - sz.width / 2, img.cols - 2 - sz.width)), y}, kFont, scale, c, 1,
+              cv::LINE_AA);
 }
 
 // Axes frame: title, y label (rotated), x label, y ticks over [y0, y1] with grid lines.
@@ -317,8 +323,9 @@ Image8 plot_bar_groups(const std::vector<BarGroup>& groups, const std::string& t
     const cv::Scalar c = kColours[gi % 10];
     const size_t first = k;
     for (const auto& [name, v] : groups[gi].bars) {
-      const int x0 = static_cast<int>(f.left + slot * k + slot * 0.15), x1 = static_cast<int>(f.left + slot * (k + 1) - slot * 0.15);
-      const int cx = (x0 + x1) / 2;
+      // Bars at most 80 pixels wide, centred in their slot.
+      const int cx = static_cast<int>(f.left + slot * (k + 0.5)), half = static_cast<int>(std::min(slot * 0.35, 40.0));
+      const int x0 = cx - half, x1 = cx + half;
       if (std::isfinite(v) && v > 0) {
         cv::rectangle(img, {x0, f.py(v)}, {x1, f.bottom}, c, cv::FILLED);
         centred_text(img, fixed(v, decimals), cx, f.py(v) - 5, 0.4, black);
