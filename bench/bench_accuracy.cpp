@@ -231,11 +231,14 @@ Image8 results_plot(const std::vector<SceneResult>& results, const std::string& 
   std::vector<ScatterGroup> points;
   for (const std::string set : {"dev", "test", "real", "other"}) {
     BarGroup g{set, {}};
-    ScatterGroup s{set, {}};
+    ScatterGroup s{set, {}, {}};
     for (const SceneResult& r : results) {
       if (r.set != set) continue;
       g.bars.emplace_back(r.name, r.scored() ? r.psnr() : kNaN);
-      if (r.scored()) s.xy.emplace_back(r.train_s, r.psnr());
+      if (r.scored()) {
+        s.xy.emplace_back(r.train_s, r.psnr());
+        s.names.push_back(r.name);
+      }
     }
     if (g.bars.empty()) continue;
     bars.push_back(g);

@@ -203,7 +203,8 @@ BOOST_AUTO_TEST_CASE(bar_groups_scale_with_the_values) {
 }
 
 BOOST_AUTO_TEST_CASE(scatter_draws_each_group) {
-  const Image8 im = plot_scatter({{"dev", {{10, 20}, {30, 25}}}, {"real", {{20, 18}, {NAN, 3}}}}, "t", "s", "PSNR", 800, 400);
+  const Image8 im =
+      plot_scatter({{"dev", {{10, 20}, {30, 25}}, {"a", "b"}}, {"real", {{20, 18}, {NAN, 3}}, {}}}, "t", "s", "PSNR", 800, 400);
   BOOST_TEST(im.width == 800);
   BOOST_TEST(im.height == 400);
   BOOST_TEST(count_colour(im, 31, 119, 180) > 50);   // two points and a legend marker

@@ -374,8 +374,18 @@ Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& 
   }
   cv::rectangle(img, {f.left, f.top}, {f.right, f.bottom}, black, 1);
   for (size_t gi = 0; gi < groups.size(); ++gi)
-    for (auto [x, y] : groups[gi].xy)
-      if (std::isfinite(x) && std::isfinite(y)) cv::circle(img, {px(x), f.py(y)}, 6, kColours[gi % 10], cv::FILLED, cv::LINE_AA);
+    for (size_t i = 0; i < groups[gi].xy.size(); ++i) {
+      const auto [x, y] = groups[gi].xy[i];
+      if (!std::isfinite(x) || !std::isfinite(y)) continue;
+      cv::circle(img, {px(x), f.py(y)}, 6, kColours[gi % 10], cv::FILLED, cv::LINE_AA);
+      if (i < groups[gi].names.size() && !groups[gi].names[i].empty()) {
+        // Beside the point, on its left when it lies in the right quarter.
+        int base = 0;
+        const cv::Size sz = cv::getTextSize(groups[gi].names[i], kFont, 0.4, 1, &base);
+        const int tx = px(x) > f.right - (f.right - f.left) / 4 ? px(x) - 10 - sz.width : px(x) + 10;
+        cv::putText(img, groups[gi].names[i], {tx, f.py(y) + sz.height / 2}, kFont, 0.4, black, 1, cv::LINE_AA);
+      }
+    }
   // Legend, top right.
   int lw = 0, base = 0;
   for (const ScatterGroup& g : groups) lw = std::max(lw, cv::getTextSize(g.label, kFont, 0.45, 1, &base).width);

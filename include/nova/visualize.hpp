@@ -58,10 +58,11 @@ Image8 plot_bar_groups(const std::vector<BarGroup>& groups, const std::string& t
                        int decimals = 2, int width = 1000, int height = 420);
 
 // Points coloured by group with a legend; x from 0 to above the largest x, y around the data.
-// Non-finite points are left out.
+// Non-finite points are left out. A point's name (when `names` has one) is written beside it.
 struct ScatterGroup {
   std::string label;
   std::vector<std::pair<double, double>> xy;
+  std::vector<std::string> names;  // optional, one per point
 };
 Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& title, const std::string& x_label,
                     const std::string& y_label, int width = 1000, int height = 420);
