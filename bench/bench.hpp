@@ -15,6 +15,7 @@ int render(const Args& args);
 #ifdef NOVA_BENCH_IO
 int tradeoff(const Args& args);  // needs nova_io (scenes, metrics, the plot)
 int view(const Args& args);      // needs nova_io (the run's scene)
+int accuracy(const Args& args);  // needs nova_io (scenes, metrics, pictures)
 #endif
 
 struct Benchmark {

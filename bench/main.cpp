@@ -15,6 +15,7 @@ const std::vector<Benchmark>& benchmarks() {
       {"render", "compositing op forward / backward for 1 + K NeRFs beside a host loop", render},
 #ifdef NOVA_BENCH_IO
       {"tradeoff", "trains a scene under several settings: PSNR against training time (CSV, PNG, speedup)", tradeoff},
+      {"accuracy", "trains and evaluates a list of scenes (sets dev, test, real) with one configuration: PSNR / SSIM / time per scene and set (table, CSV, JSON, PNG)", accuracy},
       {"view", "renders a trained run's views with early ray termination on and off: time ratio, evaluations saved", view},
 #endif
   };

@@ -171,4 +171,71 @@ BOOST_AUTO_TEST_CASE(write_video_errors_leave_nothing) {
   BOOST_TEST(folder_names(dir.path()).empty());
 }
 
+// Pixels of exactly this RGB colour.
+long count_colour(const Image8& im, uint8_t r, uint8_t g, uint8_t b) {
+  long n = 0;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) n += im.at(x, y, 0) == r && im.at(x, y, 1) == g && im.at(x, y, 2) == b;
+  return n;
+}
+
+BOOST_AUTO_TEST_CASE(bar_groups_scale_with_the_values) {
+  // Group 0 is Tableau blue (31, 119, 180), group 1 orange (255, 127, 14); bars are filled
+  // rectangles from 0, so their pixel counts are proportional to the values (same widths).
+  const auto chart = [](double a, double b, double c) {
+    return plot_bar_groups({{"dev", {{"s1", a}, {"s2", b}}}, {"real", {{"r1", c}}}}, "t", "PSNR");
+  };
+  const Image8 one = chart(10, 20, 20);
+  BOOST_TEST(one.width == 1000);
+  BOOST_TEST(one.height == 420);
+  BOOST_TEST(one.channels == 3);
+  const long blue = count_colour(one, 31, 119, 180), orange = count_colour(one, 255, 127, 14);
+  BOOST_TEST(blue > 0);
+  BOOST_TEST(orange > 0);
+  // Without the 20 dB bar, blue covers a third of it (10 of 30), within the rounding of the
+  // bar ends and the group's label underline (a few hundred pixels).
+  const Image8 two = chart(10, std::numeric_limits<double>::quiet_NaN(), 20);  // the same scale
+  const long blue_nan = count_colour(two, 31, 119, 180);
+  BOOST_TEST(blue_nan < blue / 2);
+  BOOST_TEST(blue_nan > blue / 5);
+  // An empty chart still draws its frame.
+  BOOST_TEST(plot_bar_groups({}, "empty", "PSNR").width == 1000);
+}
+
+BOOST_AUTO_TEST_CASE(scatter_draws_each_group) {
+  const Image8 im =
+      plot_scatter({{"dev", {{10, 20}, {30, 25}}, {"a", "b"}}, {"real", {{20, 18}, {NAN, 3}}, {}}}, "t", "s", "PSNR", 800, 400);
+  BOOST_TEST(im.width == 800);
+  BOOST_TEST(im.height == 400);
+  BOOST_TEST(count_colour(im, 31, 119, 180) > 50);   // two points and a legend marker
+  BOOST_TEST(count_colour(im, 255, 127, 14) > 25);
+  BOOST_TEST(count_colour(im, 44, 160, 44) == 0);    // no third group
+  BOOST_TEST(plot_scatter({}, "empty", "x", "y").width == 1000);
+}
+
+BOOST_AUTO_TEST_CASE(image_rows_keep_pixels) {
+  Image8 a = test_frame(20, 10, 1), g(8, 12, 1);
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 8; ++x) g.at(x, y) = uint8_t(10 * x + y);
+  const Image8 row = image_row({a, g}, {}, 4);
+  BOOST_TEST(row.width == 32);
+  BOOST_TEST(row.height == 12);
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 20; ++x)
+      for (int c = 0; c < 3; ++c) BOOST_TEST(row.at(x, y, c) == a.at(x, y, c));
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 8; ++x)
+      for (int c = 0; c < 3; ++c) BOOST_TEST(row.at(24 + x, y, c) == g.at(x, y));
+  BOOST_TEST(row.at(21, 0, 0) == 255);  // the gap is white
+  const Image8 captioned = image_row({a, g}, {"render", ""}, 4);
+  BOOST_TEST(captioned.height > 12);
+  BOOST_TEST(captioned.at(0, captioned.height - 12 + 0, 0) == a.at(0, 0, 0));
+  const Image8 stack = stack_images({a, g}, 2);
+  BOOST_TEST(stack.width == 20);
+  BOOST_TEST(stack.height == 24);
+  BOOST_TEST(stack.at(3, 12 + 5, 1) == g.at(3, 5));
+  BOOST_CHECK_THROW(image_row({}), Error);
+  BOOST_CHECK_THROW(image_row({a, Image8()}), Error);
+}
+
 BOOST_AUTO_TEST_SUITE_END()

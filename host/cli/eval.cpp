@@ -11,6 +11,7 @@
 
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
+#include "nova/evaluation.hpp"
 #include "nova/image_io.hpp"
 #include "nova/image_metrics.hpp"
 #include "nova/runtime.hpp"
@@ -19,10 +20,7 @@
 namespace nova::cli {
 namespace {
 
-struct Score {
-  std::string name;
-  double psnr = 0, ssim = 0;
-};
+using Score = ViewScore;
 
 std::string json_string(const std::string& s) {
   std::string o = "\"";
@@ -39,15 +37,6 @@ void print_table(const std::string& title, const std::vector<Score>& scores) {
   for (const Score& s : scores)
     std::cout << "  " << std::left << std::setw(28) << s.name << std::right << std::fixed << std::setprecision(2)
               << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim << "\n";
-}
-
-std::pair<double, double> means(const std::vector<Score>& s) {
-  double p = 0, q = 0;
-  for (const Score& x : s) {
-    p += x.psnr;
-    q += x.ssim;
-  }
-  return {s.empty() ? 0 : p / s.size(), s.empty() ? 0 : q / s.size()};
 }
 
 void json_scores(std::ostream& o, const std::string& key, const std::vector<Score>& s) {
@@ -82,12 +71,7 @@ int eval(const Args& args) {
   if (!split.empty()) {
     // A held-out split of the same scene (its own frames are the ground truth).
     Scene s = load_training_scene(run.files.scene, run.files.config, false, split);
-    for (size_t i = 0; i < s.frames.size(); ++i) {
-      Frame& f = s.frames[i];
-      char name[32];
-      std::snprintf(name, sizeof name, "%s_%03zu", split.c_str(), i);
-      views.push_back({name, split, static_cast<int>(i), f.time, f.camera, std::move(f.rgb)});
-    }
+    views = split_views(s, split);
   } else {
     std::string kind = vm["views"].as<std::string>();
     if (kind != "auto" && kind != "cam0" && kind != "heldout" && kind != "all")
@@ -111,49 +95,19 @@ int eval(const Args& args) {
   const BlendChoice blend = blend_choice(vm);
   const std::string pictures = run_dir + "/eval";
   std::filesystem::create_directories(pictures);
-  std::vector<Score> scores, compose;
-  for (size_t i = 0; i < views.size(); ++i) {
-    const GroundTruthView& v = views[i];
-    ViewRequest req;
-    req.camera = v.camera;
-    req.hard_blend = blend.scene_views;
-    req.instances = scene_instances(scene.num_objects, v.time);
-    const ViewImage img = renderer.render(req);
-    const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
-    std::string stem = v.name;
-    for (char& c : stem)
-      if (c == '/') c = '_';
-    if (stem.size() > 4 && stem.substr(stem.size() - 4) == ".png") stem.resize(stem.size() - 4);
+  const auto write = [&](size_t, const std::string& stem, const Image8& out) {
     write_png(pictures + "/" + stem + ".png", out);
-    scores.push_back({stem, psnr(out, v.rgb), ssim(out, v.rgb)});
+  };
+  const auto write_and_count = [&](size_t i, const std::string& stem, const Image8& out) {
+    write(i, stem, out);
     std::cerr << "\revaluated " << i + 1 << "/" << views.size() << std::flush;
-  }
+  };
+  const std::vector<Score> scores = score_views(renderer, scene.num_objects, views, blend.scene_views, write_and_count);
   if (!views.empty()) std::cerr << "\n";
-  for (size_t i = 0; i < scene.compose.targets.size(); ++i) {
-    const ComposeTarget& t = scene.compose.targets[i];
-    const Image8* gt = nullptr;
-    for (const auto& c : scene.compose_gt)
-      if (c.name == t.name) gt = &c.rgb;
-    if (!gt || t.camera < 0 || t.camera >= static_cast<int>(scene.frames.size())) continue;
-    ViewRequest req;
-    req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
-    req.background = t.background;
-    req.hard_blend = blend.composition;
-    for (const ComposeInstance& inst : t.instances) {
-      const InstancePivot pv = renderer.pivot_for(inst);
-      if (pv.from == InstancePivot::From::Origin)
-        std::cerr << "warning: composition target " << t.name << ": object " << inst.object
-                  << " has no density at t=" << inst.time << "; it turns about the scene origin\n";
-      req.instances.push_back(placed_instance(inst, pv.pivot));
-    }
-    const ViewImage img = renderer.render(req);
-    const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
-    write_png(pictures + "/compose_" + t.name + ".png", out);
-    compose.push_back({t.name, psnr(out, *gt), ssim(out, *gt)});
-  }
+  const std::vector<Score> compose = score_compose_targets(renderer, scene, blend.composition, write);
 
-  const auto [mp, ms] = means(scores);
-  const auto [cp, cs] = means(compose);
+  const auto [mp, ms] = mean_scores(scores);
+  const auto [cp, cs] = mean_scores(compose);
   if (!scores.empty()) print_table("views", scores);
   if (!compose.empty()) print_table("composition targets", compose);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

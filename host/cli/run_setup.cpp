@@ -3,21 +3,9 @@
 #include <filesystem>
 
 #include "nova/error.hpp"
-#include "nova/scene_io.hpp"
 
 namespace nova::cli {
 namespace fs = std::filesystem;
-
-Scene load_training_scene(const std::string& dir, const TrainConfig& config, bool load_gt,
-                          const std::string& split) {
-  LoadOptions o;
-  o.factor = config.factor;
-  o.load_gt = load_gt;
-  o.split = split;
-  Scene s = load_scene(dir, o);
-  if (config.holdout > 0 && split == "train") hold_out_frames(s, config.holdout);
-  return s;
-}
 
 OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool load_gt,
                  const std::string& split) {

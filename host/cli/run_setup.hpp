@@ -2,17 +2,15 @@
 // Loading the scene a run trains or is evaluated on, the same way for train, render and eval.
 #include <string>
 
+#include "nova/evaluation.hpp"
 #include "nova/scene.hpp"
 #include "nova/train_config.hpp"
 #include "nova/view_renderer.hpp"
 
 namespace nova::cli {
 
-// load_scene with the run's image factor, then the run's hold-out split (every n-th frame
-// leaves training and becomes a "heldout" ground-truth view). Error (exit 2) when the folder
-// is missing or bad.
-Scene load_training_scene(const std::string& dir, const TrainConfig& config, bool load_gt = false,
-                          const std::string& split = "train");
+// load_training_scene (the run's factor and hold-out split) is nova::load_training_scene in
+// nova/evaluation.hpp, shared with nova-bench.
 
 // A trained run and its scene (the run's own unless `scene_dir` is given).
 struct OpenRun {

@@ -9,6 +9,7 @@
 
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
+#include "nova/progress_line.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene_io.hpp"
 #include "nova/trainer.hpp"
@@ -16,25 +17,7 @@
 namespace nova::cli {
 namespace {
 
-std::string clock_text(double s) {
-  const long t = static_cast<long>(s + 0.5);
-  char buf[32];
-  if (t >= 3600)
-    std::snprintf(buf, sizeof buf, "%ldh%02ldm", t / 3600, t / 60 % 60);
-  else
-    std::snprintf(buf, sizeof buf, "%ldm%02lds", t / 60, t % 60);
-  return buf;
-}
-
-void print_progress(const TrainProgress& p) {
-  char line[256];
-  std::snprintf(line, sizeof line, "step %7ld/%ld  %-8s loss %.5f  psnr %5.2f dB  lr %.2e  %6.0f rays/s  %s  eta %s",
-                p.step, p.total, p.phase.c_str(), p.loss, p.psnr, p.lr, p.rays_per_s,
-                clock_text(p.seconds).c_str(), clock_text(p.eta_seconds).c_str());
-  std::cerr << line;
-  if (p.kept >= 0) std::fprintf(stderr, "  mlp on %.0f%% of samples", 100.0 * p.kept);
-  std::cerr << "\n";
-}
+void print_progress(const TrainProgress& p) { std::cerr << progress_line(p) << "\n"; }
 
 }  // namespace
 

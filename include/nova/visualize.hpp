@@ -4,6 +4,7 @@
 // RGB-interleaved Image8 as everywhere in nova (include/nova/scene.hpp); PNG output is
 // nova::write_png (include/nova/image_io.hpp).
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "nova/scene.hpp"
@@ -42,5 +43,36 @@ Image8 depth_to_color(const std::vector<float>& depth, int width, int height, fl
 // says those are still there), the folder does not exist, `path` has no extension, the
 // frames are empty or differ in size, or fps is not positive.
 void write_video(const std::vector<Image8>& frames, const std::string& path, double fps);
+
+// ---- charts and picture sheets (RGB, white background, Tableau 10 colours) ----------------
+
+// Bars in groups (e.g. scenes grouped by set): group g's bars in colour g, each bar labelled
+// beneath with its name and above with its value (`decimals`), the group's label under its
+// bars; the y axis runs from 0 to above the largest value, with ticks. Non-finite values
+// draw no bar ("n/a" above the slot).
+struct BarGroup {
+  std::string label;
+  std::vector<std::pair<std::string, double>> bars;  // name, value
+};
+Image8 plot_bar_groups(const std::vector<BarGroup>& groups, const std::string& title, const std::string& y_label,
+                       int decimals = 2, int width = 1000, int height = 420);
+
+// Points coloured by group with a legend; x from 0 to above the largest x, y around the data.
+// Non-finite points are left out. A point's name (when `names` has one) is written beside it.
+struct ScatterGroup {
+  std::string label;
+  std::vector<std::pair<double, double>> xy;
+  std::vector<std::string> names;  // optional, one per point
+};
+Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& title, const std::string& x_label,
+                    const std::string& y_label, int width = 1000, int height = 420);
+
+// The images left to right, `gap` pixels apart, each under its caption (a band of text above
+// the row; captions may be empty, or fewer than the images). Grey images are drawn as RGB;
+// images keep their pixels exactly. Throws nova::Error when `images` is empty or an image is
+// empty.
+Image8 image_row(const std::vector<Image8>& images, const std::vector<std::string>& captions = {}, int gap = 8);
+// The images top to bottom, left-aligned, `gap` pixels apart (RGB; the width of the widest).
+Image8 stack_images(const std::vector<Image8>& images, int gap = 8);
 
 }  // namespace nova

@@ -1,0 +1,50 @@
+#pragma once
+// Scoring a trained run against ground truth, the way `nova eval` does it, so that the CLI and
+// nova-bench share one implementation: the scene as the run trained on it, the ground-truth
+// views of a kind or of a split, each view rendered and scored (PSNR and SSIM on 8-bit images,
+// image_metrics.hpp), and the composition targets. Implemented in nova_io (OpenCV).
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "nova/scene.hpp"
+#include "nova/train_config.hpp"
+#include "nova/view_renderer.hpp"
+
+namespace nova {
+
+// load_scene with the run's image factor, then the run's hold-out split (every n-th frame
+// leaves training and becomes a "heldout" ground-truth view; only for split "train"). Error
+// (exit 2) when the folder is missing or bad. What `nova train`, `render` and `eval` load.
+Scene load_training_scene(const std::string& dir, const TrainConfig& config, bool load_gt = false,
+                          const std::string& split = "train");
+
+struct ViewScore {
+  std::string name;  // the view's name as a file stem ('/' -> '_', no ".png")
+  double psnr = 0, ssim = 0;
+};
+
+// The frames of a split scene (loaded with load_training_scene(..., split)) as ground-truth
+// views named SPLIT_III, kind SPLIT; moves the images out of `split_scene`.
+std::vector<GroundTruthView> split_views(Scene& split_scene, const std::string& split);
+
+// The stem `nova eval` names a view's render by: '/' -> '_', a trailing ".png" dropped.
+std::string view_stem(const std::string& name);
+
+// Called with every render: its index, the stem (compose targets: "compose_NAME") and the image.
+using RenderSink = std::function<void(size_t, const std::string&, const Image8&)>;
+
+// Renders every view (camera, every object at the view's time, learnt blending unless
+// `hard_blend`) and scores it against its ground truth.
+std::vector<ViewScore> score_views(ViewRenderer& renderer, int num_objects, const std::vector<GroundTruthView>& views,
+                                   bool hard_blend, const RenderSink& sink = {});
+
+// Renders every composition target of the scene that has a ground-truth image and scores it.
+std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene& scene, bool hard_blend,
+                                             const RenderSink& sink = {});
+
+// Mean PSNR and SSIM (0, 0 when empty).
+std::pair<double, double> mean_scores(const std::vector<ViewScore>& scores);
+
+}  // namespace nova

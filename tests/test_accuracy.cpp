@@ -1,0 +1,278 @@
+// nova-bench accuracy: the scene list (sets expand, duplicates go, unknown names are errors),
+// the per-set aggregates on given numbers, the CSV and JSON read back; then the command on a
+// tiny synthetic scene with tiny networks (a run, a --reuse run that trains nothing and scores
+// the same) and its bad inputs (exit 2, one line naming the input, nothing written).
+#include <boost/property_tree/json_parser.hpp>
+#include <boost/property_tree/ptree.hpp>
+#include <boost/test/unit_test.hpp>
+#include <cstdlib>
+#include <sys/wait.h>
+
+#include "../bench/accuracy.hpp"
+#include "nova/image_io.hpp"
+#include "scene_test_util.hpp"
+
+namespace nova::test {
+namespace {
+using namespace nova::accuracy;
+
+std::vector<std::string> names(const std::vector<SceneSpec>& specs) {
+  std::vector<std::string> out;
+  for (const SceneSpec& s : specs) out.push_back(s.name);
+  return out;
+}
+
+std::string error_of(const std::string& list) {
+  try {
+    parse_scene_list(list);
+  } catch (const Error& e) {
+    BOOST_TEST(e.exit_code() == kExitUsage);
+    return e.what();
+  }
+  BOOST_ERROR("no error for '" << list << "'");
+  return "";
+}
+
+SceneResult result(const std::string& name, const std::string& set, double cam0, double held, double comp, double train,
+                   const std::string& status = "ok") {
+  SceneResult r;
+  r.name = name, r.set = set, r.cam0_psnr = cam0, r.heldout_psnr = held, r.compose_psnr = comp, r.train_s = train;
+  r.status = status;
+  r.steps = 100;
+  return r;
+}
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result bench_cli(const std::string& args, const TempDir& dir) {
+  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
+  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova-bench accuracy " + args + " >" + out + " 2>" + err;
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(out), read_all(err)};
+}
+
+bool has_bench() { return fs::exists(fs::path(NOVA_BINARY_DIR) / "nova-bench"); }
+
+// Tiny networks and schedule (as test_tradeoff's): seconds per run on 2 PoCL cores.
+const std::string kTiny =
+    " --set hash-levels=4 --set hash-log2-size=10 --set hash-max-res=32 --set depth=2 --set width=16 --set skip=-1"
+    " --set rays=64 --set samples=8 --set pretrain-steps=3 --set steps=6 --set augment-start=0 --set log-every=3";
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(accuracy)
+
+BOOST_AUTO_TEST_CASE(scene_lists_expand_sets_and_drop_duplicates) {
+  BOOST_TEST(names(parse_scene_list("dev")) == (std::vector<std::string>{"family:1", "family:2", "family:3", "family:4"}),
+             boost::test_tools::per_element());
+  BOOST_TEST(names(parse_scene_list("test")) ==
+                 (std::vector<std::string>{"family:101", "family:102", "family:103", "family:104"}),
+             boost::test_tools::per_element());
+  BOOST_TEST(parse_scene_list("all").size() == 11u);
+  // Duplicates (also through a set, or a seed written differently) are dropped, first mention kept.
+  const auto mixed = parse_scene_list("family:3, dev,balloon,synth:tiny:00,synth:tiny:0,real,family:003");
+  BOOST_TEST(names(mixed) == (std::vector<std::string>{"family:3", "family:1", "family:2", "family:4", "balloon",
+                                                       "synth:tiny:0", "fern", "lego"}),
+             boost::test_tools::per_element());
+  // Named directly or only through a set (a missing data folder is an error only for the former).
+  BOOST_TEST(mixed[0].named);
+  BOOST_TEST(!mixed[1].named);
+  BOOST_TEST(mixed[4].named);
+  BOOST_TEST(!mixed[6].named);
+  BOOST_TEST(parse_scene_list("real,lego").back().named);
+  // Sets and protocols.
+  BOOST_TEST(parse_scene("family:2").set == "dev");
+  BOOST_TEST(parse_scene("family:104").set == "test");
+  BOOST_TEST(parse_scene("family:7").set == "other");
+  BOOST_TEST(parse_scene("synth:default:1").set == "other");
+  const SceneSpec f = parse_scene("family:101");
+  BOOST_TEST(f.synthetic);
+  BOOST_TEST(f.preset == "family");
+  BOOST_TEST(f.seed == 101u);
+  BOOST_TEST(f.dir_name() == "family-101");
+  const SceneSpec b = parse_scene("balloon");
+  BOOST_TEST(b.folder == "nvidia_balloon1");
+  BOOST_TEST((b.protocol == std::vector<std::pair<std::string, std::string>>{{"factor", "4"}, {"holdout", "4"}}));
+  BOOST_TEST((parse_scene("fern").protocol == std::vector<std::pair<std::string, std::string>>{{"holdout", "8"}}));
+  BOOST_TEST(parse_scene("lego").protocol.empty());
+  BOOST_TEST(parse_scene("lego").eval_split == "test");
+  BOOST_TEST(parse_scene("synth:tiny:5").preset == "tiny");
+}
+
+BOOST_AUTO_TEST_CASE(unknown_scenes_are_errors_naming_them) {
+  BOOST_TEST(error_of("dev,moon").find("unknown scene 'moon'") != std::string::npos);
+  BOOST_TEST(error_of("Dev").find("'Dev'") != std::string::npos);
+  BOOST_TEST(error_of("synth:tiny").find("'synth:tiny'") != std::string::npos);
+  BOOST_TEST(error_of("family:x").find("seed 'x'") != std::string::npos);
+  BOOST_TEST(error_of("family:-1").find("'family:-1'") != std::string::npos);
+  BOOST_TEST(error_of("family:99999999999").find("seed") != std::string::npos);
+  BOOST_TEST(error_of(" , ").find("names no scene") != std::string::npos);
+}
+
+BOOST_AUTO_TEST_CASE(aggregates_per_set) {
+  const std::vector<SceneResult> rs = {
+      result("family:1", "dev", 20, 18, 17, 10),
+      result("family:2", "dev", 24, 20, kNaN, 30),
+      result("family:3", "dev", 22, 22, 19, 20),
+      result("family:4", "dev", 5, 5, 5, 1000, "failed: diverged"),  // counts nowhere
+      result("family:101", "test", 26, 21, 23, 15, "reused"),
+      result("balloon", "real", kNaN, 18.5, kNaN, 40),
+  };
+  const std::vector<SetSummary> s = aggregate(rs);
+  BOOST_REQUIRE(s.size() == 4u);
+  BOOST_TEST(s[0].set == "dev");
+  BOOST_TEST(s[0].scenes == 3);
+  BOOST_TEST(s[0].mean_cam0_psnr == 22.0, boost::test_tools::tolerance(1e-12));
+  BOOST_TEST(s[0].min_cam0_psnr == 20.0);
+  BOOST_TEST(s[0].mean_heldout_psnr == 20.0, boost::test_tools::tolerance(1e-12));
+  BOOST_TEST(s[0].mean_compose_psnr == 18.0, boost::test_tools::tolerance(1e-12));  // NaN left out
+  BOOST_TEST(s[0].total_train_s == 60.0, boost::test_tools::tolerance(1e-12));
+  BOOST_TEST(s[1].set == "test");
+  BOOST_TEST(s[1].mean_cam0_psnr == 26.0);
+  BOOST_TEST(s[2].set == "real");
+  BOOST_TEST(std::isnan(s[2].mean_cam0_psnr));
+  BOOST_TEST(std::isnan(s[2].min_cam0_psnr));
+  BOOST_TEST(s[2].mean_heldout_psnr == 18.5);
+  BOOST_TEST(s[3].set == "all");
+  BOOST_TEST(s[3].scenes == 5);
+  BOOST_TEST(s[3].mean_cam0_psnr == 23.0, boost::test_tools::tolerance(1e-12));
+  BOOST_TEST(s[3].min_cam0_psnr == 20.0);
+  BOOST_TEST(s[3].total_train_s == 115.0, boost::test_tools::tolerance(1e-12));
+  // One set: no "all" row.
+  BOOST_TEST(aggregate({rs[0], rs[1]}).size() == 1u);
+  BOOST_TEST(rs[5].psnr() == 18.5);  // held-out where there is no camera 0
+  BOOST_TEST(rs[0].psnr() == 20.0);
+}
+
+BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
+  std::vector<SceneResult> rs = {result("family:1", "dev", 20.12346, 18.5, 17.25, 10.5),
+                                 result("lego", "real", kNaN, 20.47, kNaN, 72.25, "failed: a, \"b\"")};
+  rs[0].cam0_ssim = 0.81234;
+  rs[0].cam0_views = 24;
+  rs[0].heldout_views = 48;
+  rs[0].compose_views = 3;
+  rs[0].eval_s = 4.25;
+  rs[1].heldout_views = 20;
+  const std::vector<SetSummary> sets = aggregate(rs);
+  const std::string csv = csv_text(rs, sets);
+  std::vector<SceneResult> back;
+  std::vector<SetSummary> back_sets;
+  parse_csv(csv, &back, &back_sets);
+  BOOST_REQUIRE(back.size() == 2u);
+  BOOST_REQUIRE(back_sets.size() == sets.size());
+  BOOST_TEST(back[0].name == "family:1");
+  BOOST_TEST(back[0].cam0_psnr == 20.1235, boost::test_tools::tolerance(1e-9));  // 4 decimals
+  BOOST_TEST(back[0].cam0_ssim == 0.81234, boost::test_tools::tolerance(1e-9));
+  BOOST_TEST(back[0].eval_s == 4.25);
+  BOOST_TEST(back[0].cam0_views == 24);
+  BOOST_TEST(back[0].compose_views == 3);
+  BOOST_TEST(back[0].steps == 100);
+  BOOST_TEST(std::isnan(back[1].cam0_psnr));
+  BOOST_TEST(back[1].status == "failed: a, \"b\"");
+  BOOST_TEST(back[1].heldout_views == 20);
+  BOOST_TEST(back_sets[0].set == "dev");
+  BOOST_TEST(back_sets[0].mean_cam0_psnr == 20.1235, boost::test_tools::tolerance(1e-9));
+  BOOST_TEST(csv_text(back, back_sets) == csv);  // a fixed point
+  BOOST_CHECK_THROW(parse_csv("kind,name\n", &back, &back_sets), Error);
+  BOOST_CHECK_THROW(parse_csv(std::string(kCsvHeader) + "\nscene,x\n", &back, &back_sets), Error);
+
+  std::stringstream json(json_text({{"preset", "quick"}, {"set steps", "30"}}, rs, sets));
+  boost::property_tree::ptree t;
+  boost::property_tree::read_json(json, t);
+  BOOST_TEST(t.get<std::string>("configuration.preset") == "quick");
+  BOOST_TEST(t.get<int>("configuration.set steps") == 30);
+  std::vector<boost::property_tree::ptree> scenes;
+  for (const auto& [k, v] : t.get_child("scenes")) scenes.push_back(v);
+  BOOST_REQUIRE(scenes.size() == 2u);
+  BOOST_TEST(scenes[0].get<std::string>("name") == "family:1");
+  BOOST_TEST(scenes[0].get<double>("cam0_psnr") == 20.1235, boost::test_tools::tolerance(1e-9));
+  BOOST_TEST(scenes[0].get<double>("train_seconds") == 10.5);
+  BOOST_TEST(scenes[1].get<std::string>("cam0_psnr") == "null");
+  BOOST_TEST(scenes[1].get<std::string>("status") == "failed: a, \"b\"");
+  BOOST_TEST(scenes[1].get<double>("heldout_psnr") == 20.47, boost::test_tools::tolerance(1e-9));
+  std::vector<std::string> set_names;
+  for (const auto& [k, v] : t.get_child("sets")) set_names.push_back(v.get<std::string>("set"));
+  BOOST_TEST(set_names == (std::vector<std::string>{"dev", "real", "all"}), boost::test_tools::per_element());
+  const std::string table = table_text(rs, sets);
+  BOOST_TEST(table.find("family:1") != std::string::npos);
+  BOOST_TEST(table.find("20.12") != std::string::npos);
+}
+
+BOOST_AUTO_TEST_CASE(runs_on_a_tiny_synthetic_scene) {
+  if (!has_bench()) return;
+  TempDir dir("accuracy-run");
+  const std::string out = (dir / "a").string();
+  const Result r = bench_cli("--scenes synth:tiny:3 --out " + out + kTiny, dir);
+  BOOST_REQUIRE_MESSAGE(r.code == 0, r.err);
+  for (const char* f : {"accuracy.csv", "accuracy.json", "accuracy.png", "pictures/synth-tiny-3.png",
+                        "scenes/synth-tiny-3/synth.txt", "runs/synth-tiny-3/config.ini", "runs/synth-tiny-3/checkpoint.bin"})
+    BOOST_TEST(fs::exists(fs::path(out) / f), f);
+  BOOST_TEST(r.err.find("[1/1] synth:tiny:3 (other)") != std::string::npos, r.err);
+  BOOST_TEST(r.err.find("step       9/9") != std::string::npos, r.err);  // the trainer's own progress lines
+  std::vector<SceneResult> rs;
+  std::vector<SetSummary> sets;
+  parse_csv(read_all(fs::path(out) / "accuracy.csv"), &rs, &sets);
+  BOOST_REQUIRE(rs.size() == 1u);
+  BOOST_TEST(rs[0].status == "ok");
+  BOOST_TEST(rs[0].steps == 9);
+  BOOST_TEST(rs[0].cam0_views == 10);     // camera 0 at every time of the tiny scene
+  BOOST_TEST(rs[0].heldout_views == 20);  // two held-out cameras
+  BOOST_TEST(rs[0].compose_views > 0);
+  BOOST_TEST(std::isfinite(rs[0].cam0_psnr));
+  BOOST_TEST(rs[0].cam0_psnr > 5.0);
+  BOOST_TEST(rs[0].train_s > 0.0);
+  BOOST_TEST(r.out.find("synth:tiny:3") != std::string::npos, r.out);
+  const Image8 pic = read_rgb((fs::path(out) / "pictures/synth-tiny-3.png").string());
+  BOOST_TEST(pic.width >= 6 * 64);  // three times, render and truth
+  BOOST_TEST(read_rgb((fs::path(out) / "accuracy.png").string()).width == 1000);
+
+  // --reuse: the finished run is kept (no training) and scores the same.
+  const Result again = bench_cli("--scenes synth:tiny:3 --reuse --out " + out + kTiny, dir);
+  BOOST_REQUIRE_MESSAGE(again.code == 0, again.err);
+  BOOST_TEST(again.err.find("reusing the finished run") != std::string::npos, again.err);
+  BOOST_TEST(again.err.find("step       9/9") == std::string::npos, again.err);
+  std::vector<SceneResult> rs2;
+  parse_csv(read_all(fs::path(out) / "accuracy.csv"), &rs2, &sets);
+  BOOST_REQUIRE(rs2.size() == 1u);
+  BOOST_TEST(rs2[0].status == "reused");
+  BOOST_TEST(rs2[0].cam0_psnr == rs[0].cam0_psnr);
+  BOOST_TEST(rs2[0].train_s == rs[0].train_s);
+  // Another configuration is trained again.
+  const Result other = bench_cli("--scenes synth:tiny:3 --reuse --out " + out + kTiny + " --set seed=2", dir);
+  BOOST_REQUIRE_MESSAGE(other.code == 0, other.err);
+  BOOST_TEST(other.err.find("reusing") == std::string::npos, other.err);
+}
+
+BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_write_nothing) {
+  if (!has_bench()) return;
+  TempDir dir("accuracy-bad");
+  const std::string out = (dir / "a").string();
+  const auto expect = [&](const std::string& args, const std::string& needle) {
+    const Result r = bench_cli("--out " + out + " " + args, dir);
+    BOOST_TEST(r.code == 2, args << " -> exit " << r.code << ": " << r.err);
+    BOOST_TEST(r.err.find(needle) != std::string::npos, args << ": '" << needle << "' not in: " << r.err);
+    BOOST_TEST(std::count(r.err.begin(), r.err.end(), '\n') == 1, "one line: " << r.err);
+    BOOST_TEST(!fs::exists(out), args);
+  };
+  expect("--scenes synth:tiny:0,moon", "unknown scene 'moon'");
+  expect("--scenes synth:nosuch:0", "scene 'synth:nosuch:0'");
+  expect("--scenes synth:tiny:0 --set wings=2", "--set 'wings=2'");
+  expect("--scenes synth:tiny:0 --set steps=many", "--set 'steps=many'");
+  expect("--scenes synth:tiny:0 --set steps", "--set 'steps'");
+  expect("--scenes synth:tiny:0 --preset fast", "fast");
+  expect("--scenes synth:tiny:0 --config " + (dir / "none.ini").string(), "none.ini");
+  expect("--scenes lego --data " + (dir / "no-data").string(), "scene 'lego'");
+  expect("--scenes synth:tiny:0 --frobnicate 1", "--frobnicate");
+  // A real scene reached only through a set is skipped with a note; --dry-run writes nothing.
+  const Result d = bench_cli("--out " + out + " --scenes real,synth:tiny:0 --dry-run --data " + (dir / "no-data").string(), dir);
+  BOOST_TEST(d.code == 0, d.err);
+  BOOST_TEST(d.out.find("skipped balloon") != std::string::npos, d.out);
+  BOOST_TEST(!fs::exists(out));
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+}  // namespace nova::test
