@@ -254,8 +254,8 @@ int mlp(const Args& args) {
       }
     }
   }
-  // The hidden w x w layer's GEMMs alone, device beside host BLAS in this run: the rate of
-  // issue 6's goal (device >= 0.5 of the host BLAS for the 256-wide layers).
+  // The hidden w x w layer's GEMMs alone, device beside host BLAS in this run: the ratio that
+  // says how close the device's GEMMs come to the host BLAS on the 256-wide layers.
   const size_t lw = static_cast<size_t>(o.integer("layer"));
   std::ostringstream layer_csv;
   layer_csv << "gemm,batch,layer,fwd_gflops,dx_gflops,dw_gflops,layer_gflops,host_fwd_gflops,"

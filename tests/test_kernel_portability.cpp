@@ -1,4 +1,4 @@
-// Portable kernels (issue 7): no embedded kernel source may depend on an optional OpenCL
+// Portable kernels: no embedded kernel source may depend on an optional OpenCL
 // feature without a fallback. fp64, fp16, subgroups and every cl_khr_/vendor extension are
 // optional on OpenCL 1.2 devices (PoCL has no fp16 or subgroups), so such code is allowed
 // only inside an `#if`/`#ifdef` on the extension's macro that has an `#else` branch. Local

@@ -1,5 +1,5 @@
 // Every kernel of kernels/*.cl launched at a problem size that is no multiple of any
-// work-group size, and checked there against a float64 host reference (issue 7, portable
+// work-group size, and checked there against a float64 host reference (portable
 // kernels). The runtime rounds the global size up to the queried work-group size and every
 // kernel guards with its own count; a missing guard, a wrong count or a skipped last group
 // shows up here as a wrong element in the last, partial work-group.

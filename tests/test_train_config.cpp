@@ -75,10 +75,11 @@ BOOST_AUTO_TEST_CASE(the_hash_box_comes_from_the_scene) {
 }
 
 BOOST_AUTO_TEST_CASE(a_run_written_before_an_option_existed_keeps_its_behaviour) {
-  // A session-5 run's config.ini: quick, without the options added since, whose quick values
+  // An older run's config.ini: quick, without the options added since, whose quick values
   // would change the model it renders (object grid) or how it resumes (the two priors).
   std::string text = format_config(preset_config("quick"));
-  for (const char* key : {"hash-object-max-res", "static-background-only", "w-free-space"}) {
+  for (const char* key : {"hash-object-max-res", "static-background-only", "w-free-space",
+                          "free-space-behind"}) {
     const size_t at = text.find(std::string("\n") + key + " = ");
     BOOST_REQUIRE(at != std::string::npos);
     text.erase(at + 1, text.find('\n', at + 1) - at);
@@ -87,12 +88,14 @@ BOOST_AUTO_TEST_CASE(a_run_written_before_an_option_existed_keeps_its_behaviour)
   BOOST_TEST(run.field.object_max_resolution == 0);
   BOOST_TEST(!run.static_background_only);
   BOOST_TEST(run.w_free_space == 0.0f);
+  BOOST_TEST(run.free_space_behind == 0.0f);
   BOOST_TEST(run.field.hash_time_auto);  // written in the file: kept
   // A partial file the user wrote takes the preset's values for what it leaves out.
   const TrainConfig partial = parse_config_text(text, "mine.ini");
   BOOST_TEST(partial.field.object_max_resolution == 32);
   BOOST_TEST(partial.static_background_only);
   BOOST_TEST(partial.w_free_space == 1.0f);
+  BOOST_TEST(partial.free_space_behind == 1.0f);
   // A current run's file names every option: nothing falls back.
   const TrainConfig now = parse_config_text(format_config(preset_config("quick")), "config.ini",
                                             nullptr, ConfigFile::RunFile);

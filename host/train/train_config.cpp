@@ -159,7 +159,7 @@ std::vector<ConfigOption> make_options() {
                }});
   o.push_back(int_option("hash-object-max-res", "hash grid of the object NeRFs: cells per dimension of the finest level (0: hash-max-res)", 0, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.field.object_max_resolution; }));
-  o.back().before = "0";  // session 7
+  o.back().before = "0";
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: from the scene: NDC, the training rays' extent (see hash-ndc-box-from-rays); else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray (more than [-1, 1] where the camera moves sideways); false: [-1, 1]",
@@ -220,10 +220,10 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.w_distortion; }));
   o.push_back(bool_option("static-background-only", "joint training: the static NeRF learns from background pixels only (object pixels send it no gradient; not in the reference)",
                           [](TrainConfig& c) -> bool& { return c.static_background_only; }));
-  o.back().before = "false";  // session 6
+  o.back().before = "false";
   o.push_back(float_option("w-free-space", "weight of the free-space loss: object weight in front of the surface the disparity gives, on its mask's rays (joint training; NDC scenes with disp/ only; not in the reference)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_free_space; }));
-  o.back().before = "0";  // session 6
+  o.back().before = "0";
   o.push_back(float_option("free-space-margin", "free-space loss: depth (NDC t) in front of the disparity's surface that still counts as the surface", 0.0, 1.0,
                            [](TrainConfig& c) -> float& { return c.free_space_margin; }));
   o.push_back(float_option("free-space-behind", "free-space loss: weight of object weight more than the margin behind the disparity's surface, relative to in front (0: in front only)", 0.0, 1e6,
@@ -290,6 +290,9 @@ TrainConfig preset_config(const std::string& name) {
   // rays in front of its surface; from camera 0 of the default synthetic scene that haze was
   // the largest error. The free-space loss puts the surface where the disparity says.
   c.w_free_space = 1.0f;
+  // ... and behind it: pushed back along that camera's rays an object renders the same
+  // training image and sits displaced from every other camera.
+  c.free_space_behind = 1.0f;
   // Object pixels teach the static NeRF nothing, so it does not keep the objects' colours
   // along their paths (ghosts behind every moved or removed instance).
   c.static_background_only = true;
