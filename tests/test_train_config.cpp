@@ -95,7 +95,6 @@ BOOST_AUTO_TEST_CASE(a_run_written_before_an_option_existed_keeps_its_behaviour)
   BOOST_TEST(partial.field.object_max_resolution == 32);
   BOOST_TEST(partial.static_background_only);
   BOOST_TEST(partial.w_free_space == 1.0f);
-  BOOST_TEST(partial.free_space_behind == 1.0f);
   // A current run's file names every option: nothing falls back.
   const TrainConfig now = parse_config_text(format_config(preset_config("quick")), "config.ini",
                                             nullptr, ConfigFile::RunFile);

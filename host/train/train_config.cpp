@@ -290,9 +290,6 @@ TrainConfig preset_config(const std::string& name) {
   // rays in front of its surface; from camera 0 of the default synthetic scene that haze was
   // the largest error. The free-space loss puts the surface where the disparity says.
   c.w_free_space = 1.0f;
-  // ... and behind it: pushed back along that camera's rays an object renders the same
-  // training image and sits displaced from every other camera.
-  c.free_space_behind = 1.0f;
   // Object pixels teach the static NeRF nothing, so it does not keep the objects' colours
   // along their paths (ghosts behind every moved or removed instance).
   c.static_background_only = true;
