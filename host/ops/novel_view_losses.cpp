@@ -184,24 +184,13 @@ namespace {
 
 Tensor alpha_like_loss(const std::string& op, Tensor raw, Tensor delta, Tensor masks, Tensor noise,
                        bool blend_sigmoid, float c_out, float c_in) {
-  const auto d = raw_dims(raw, op);
-  if (d.batch < 2) bad(op, "needs at least one object NeRF (N >= 2), raw is " + raw.shape().str());
-  if (masks.shape().rank() != 2 || masks.shape()[0] != d.batch)
-    bad(op, "masks must be [N, R], got " + masks.shape().str());
-  const size_t rays = masks.shape()[1];
-  if (d.rows % rays) bad(op, "masks " + masks.shape().str() + " do not fit raw " + raw.shape().str());
-  const size_t samples = d.rows / rays;
-  const size_t dn = delta.shape().numel();
-  if (dn != d.rows && dn != d.batch * d.rows) bad(op, "delta " + delta.shape().str() + " does not fit");
-  if (noise.valid() && noise.shape().numel() != d.batch * d.rows)
-    bad(op, "noise " + noise.shape().str() + " does not fit");
-  for (const Tensor& t : {delta, masks, noise}) require_data(op, t);
+  const auto l = detail::alpha_loss_layout(op, raw, delta, masks, noise, kRawChannels);
   Graph& g = *raw.graph;
   Tensor y = g.activation(raw.info().name + "." + op, Shape{1});
   std::vector<Tensor> inputs = {raw, delta, masks};
   if (noise.valid()) inputs.push_back(noise);
-  g.add(std::make_unique<AlphaLossOp>(d.batch, rays, samples, d.cols, dn != d.rows, noise.valid(),
-                                      blend_sigmoid, c_out, c_in),
+  g.add(std::make_unique<AlphaLossOp>(l.nerfs, l.rays, l.samples, l.cols, l.per_nerf_delta,
+                                      noise.valid(), blend_sigmoid, c_out, c_in),
         inputs, {y});
   return y;
 }
