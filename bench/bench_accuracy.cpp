@@ -91,7 +91,7 @@ std::string read_text(const std::string& path) {
 double since(clock_type::time_point t) { return std::chrono::duration<double>(clock_type::now() - t).count(); }
 
 // --data, else the first shared/data folder found beside an ancestor of the source tree, the
-// executable or the working directory (the repository's ../shared/data).
+// executable or the working directory (a shared/data folder beside the repository).
 std::string data_folder(const std::string& given) {
   if (!given.empty()) return given;
   std::vector<fs::path> starts;

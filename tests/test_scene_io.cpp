@@ -147,7 +147,7 @@ BOOST_AUTO_TEST_CASE(blender_json_with_time) {
 }
 
 BOOST_AUTO_TEST_CASE(shared_data_if_available) {
-  // Extra checks on the real scenes in ../shared/data, never required.
+  // Extra checks on the real scenes of the optional shared data folder, never required.
   const fs::path data = fs::path(NOVA_SOURCE_DIR) / ".." / "shared" / "data";
   if (fs::exists(data / "llff_fern" / "poses_bounds.npy")) {
     const Scene s = load_scene((data / "llff_fern").string());

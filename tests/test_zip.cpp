@@ -1,5 +1,5 @@
 // Our DEFLATE decoder (for .npz files) against streams made by zlib (fixed and dynamic
-// Huffman blocks), its errors, and the tiny D-NeRF .npz when ../shared/data has it.
+// Huffman blocks), its errors, and the tiny D-NeRF .npz when the optional shared data folder has it.
 #include <boost/test/unit_test.hpp>
 #include <filesystem>
 
@@ -93,7 +93,7 @@ BOOST_AUTO_TEST_CASE(inflate_errors) {
 BOOST_AUTO_TEST_CASE(dnerf_npz_if_available) {
   const std::filesystem::path dir = std::filesystem::path(NOVA_SOURCE_DIR) / ".." / "shared" / "data" / "dnerf_lego_tiny";
   if (!std::filesystem::exists(dir)) {
-    BOOST_TEST_MESSAGE("../shared/data/dnerf_lego_tiny not present; skipped");
+    BOOST_TEST_MESSAGE("shared data folder: dnerf_lego_tiny not present; skipped");
     return;
   }
   const Scene s = load_scene(dir.string());

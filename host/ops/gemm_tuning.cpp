@@ -1,7 +1,7 @@
 // GEMM tuning: the static per-device table (CLBlast kernel parameters that beat its defaults),
 // the per-device cache of measured winners (`nova tune`), and applying both.
 // Table entries are matched on device type and vendor; values come from measurements on the
-// device class (../shared/DESIGN.md for PoCL), not guesses.
+// device class, not guesses.
 #include <clblast.h>
 
 #include <algorithm>
