@@ -126,9 +126,7 @@ std::vector<double> device_layer_seconds(Runtime& rt, size_t m, size_t w, int re
     }));
     const auto tuned = gemm_provider(rt) == GemmProvider::Tuned ? tuned_gemm_config(rt, g)
                                                                  : std::nullopt;
-    configs.push_back(gemm_provider(rt) == GemmProvider::Kernels ? "kernels"
-                      : tuned                                     ? tuned->str()
-                                                                  : "clblast (table)");
+    configs.push_back(gemm_choice(rt, g).str() + (tuned ? " (tuned)" : ""));
   }
   return secs;
 }
@@ -167,12 +165,7 @@ int mlp(const Args& args) {
   std::vector<GemmProvider> providers;
   {
     std::stringstream list(o.str("gemm"));
-    for (std::string name; std::getline(list, name, ',');) {
-      if (name == "clblast") providers.push_back(GemmProvider::CLBlast);
-      else if (name == "kernels") providers.push_back(GemmProvider::Kernels);
-      else if (name == "tuned") providers.push_back(GemmProvider::Tuned);
-      else throw Error("--gemm: '" + name + "' is not one of tuned, clblast, kernels");
-    }
+    for (std::string name; std::getline(list, name, ',');) providers.push_back(parse_gemm_provider(name, "--gemm"));
   }
   std::ostringstream csv;
   csv << "gemm,batch,pass,device_samples_per_s,device_gflops,two_ops_samples_per_s,"

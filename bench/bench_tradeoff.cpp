@@ -88,8 +88,7 @@ std::string env_gemm() {
   const char* e = std::getenv("NOVA_GEMM");
   const std::string v = e ? e : "";
   if (v.empty()) return "tuned";
-  if (v != "tuned" && v != "clblast" && v != "kernels")
-    throw Error("NOVA_GEMM='" + v + "' is not one of tuned, clblast, kernels");
+  parse_gemm_provider(v, "NOVA_GEMM");  // validates
   return v;
 }
 
@@ -157,9 +156,7 @@ RunResult run_setting(const Planned& pl, const Scene& scene, const DeviceInfo& d
   RunResult r;
   const TrainConfig& c = pl.config;
   Runtime rt(device, false);
-  set_gemm_provider(rt, pl.gemm == "kernels"   ? GemmProvider::Kernels
-                        : pl.gemm == "clblast" ? GemmProvider::CLBlast
-                                               : GemmProvider::Tuned);
+  set_gemm_provider(rt, pl.gemm.empty() ? GemmProvider::Tuned : parse_gemm_provider(pl.gemm, "gemm"));
   if (warmup) {
     // Builds every kernel and GEMM program both phases use (PoCL compiles a new CLBlast
     // program in 18-35 s), so that compiles do not count as training time.

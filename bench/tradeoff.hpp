@@ -19,6 +19,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "nova/error.hpp"
+#include "nova/gemm.hpp"
 #include "nova/scene.hpp"
 #include "nova/train_config.hpp"
 
@@ -29,7 +30,7 @@ namespace nova::tradeoff {
 struct Setting {
   std::string name;
   std::vector<std::pair<std::string, std::string>> overrides;  // nova train key = value, in order
-  std::string gemm;  // "tuned", "clblast", "kernels", or "" (the process default: NOVA_GEMM, else tuned)
+  std::string gemm;  // "tuned", "clblast", "kernels", "host", or "" (the process default: NOVA_GEMM, else tuned)
 };
 
 inline std::string trim(const std::string& s) {
@@ -67,8 +68,11 @@ inline Setting parse_setting(const std::string& text, const std::string& origin 
     if (key.empty() || value.empty()) throw bad("'" + item + "' is not KEY=VALUE");
     if (key.rfind("--", 0) == 0) key = key.substr(2);
     if (key == "gemm" || key == "NOVA_GEMM") {
-      if (value != "tuned" && value != "clblast" && value != "kernels")
-        throw bad("GEMM provider '" + value + "' is not one of tuned, clblast, kernels");
+      try {
+        parse_gemm_provider(value, "GEMM provider");
+      } catch (const Error& e) {
+        throw bad(e.what());
+      }
       s.gemm = value;
       continue;
     }

@@ -10,7 +10,7 @@ PACKAGES=(
   libclblast-dev
   libopencv-dev
   libboost-program-options-dev libboost-test-dev
-  libopenblas-dev   # host BLAS: only nova-bench's comparison column uses it
+  libopenblas-dev   # host BLAS: the "host" GEMM provider of CPU devices (loaded at run time) and the benches
 )
 
 missing=()

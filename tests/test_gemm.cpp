@@ -1,12 +1,13 @@
-// GEMM through both providers (CLBlast with the device's tuning, and nova's own kernels)
-// against a float64 host reference, for the NeRF layer shapes and the transposed products the
-// backward uses.
+// GEMM through every provider (CLBlast with the device's tuning, nova's own kernels, and the
+// host BLAS where the device runs native kernels) against a float64 host reference, for the
+// NeRF layer shapes and the transposed products the backward uses.
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 #include <limits>
 
 #include "harness.hpp"
 #include "nova/gemm.hpp"
+#include "ops/gemm_host.hpp"
 
 using namespace nova;
 
@@ -21,7 +22,9 @@ struct Case {
 // |err| <= 2 k u sum_l |a_il b_lj| + u |c| with u = 2^-24 (Higham's worst-case bound for a
 // float32 dot product of length k, doubled for the beta term), so an indexing or layout bug,
 // which moves results by O(sum |a b|), cannot pass.
-void run_case_with(GemmProvider provider, const Case& c, float beta) {
+// With `in_arena`, A, B and C are sub-buffers at aligned offsets of one allocation, as the
+// executor's arena hands them to ops (a provider must honour a sub-buffer's origin).
+void run_case_with(GemmProvider provider, const Case& c, float beta, bool in_arena = false) {
   Runtime& rt = test::runtime();
   set_gemm_provider(rt, provider);
   const size_t rows_a = c.ta ? c.k : c.m, cols_a = c.ta ? c.m : c.k;
@@ -30,7 +33,24 @@ void run_case_with(GemmProvider provider, const Case& c, float beta) {
   const auto a = test::random_floats(sa * c.batch, -1, 1, 1);
   const auto b = test::random_floats(sb * c.batch, -1, 1, 2);
   const auto c0 = test::random_floats(sc * c.batch, -1, 1, 3);
-  Buffer da = rt.upload_floats(a), db = rt.upload_floats(b), dc = rt.upload_floats(c0);
+  Buffer da, db, dc, arena;
+  if (in_arena) {
+    const size_t align = std::max<size_t>(rt.info().base_addr_align_bytes, 4);
+    auto up = [&](size_t floats) { return (floats * sizeof(float) + align - 1) / align * align; };
+    const size_t oa = align, ob = oa + up(a.size()) + align, oc = ob + up(b.size()) + align;
+    arena = rt.alloc(oc + up(c0.size()) + align);
+    rt.fill_zero(arena.get(), arena.bytes());
+    da = rt.sub_buffer(arena, oa, a.size() * sizeof(float));
+    db = rt.sub_buffer(arena, ob, b.size() * sizeof(float));
+    dc = rt.sub_buffer(arena, oc, c0.size() * sizeof(float));
+    rt.upload(da.get(), a.data(), a.size() * sizeof(float));
+    rt.upload(db.get(), b.data(), b.size() * sizeof(float));
+    rt.upload(dc.get(), c0.data(), c0.size() * sizeof(float));
+  } else {
+    da = rt.upload_floats(a);
+    db = rt.upload_floats(b);
+    dc = rt.upload_floats(c0);
+  }
   GemmArgs g{c.ta, c.tb, c.m, c.n, c.k, 1.0f, da.get(), cols_a, sa, db.get(), cols_b, sb,
              beta, dc.get(), c.n, sc, c.batch};
   Buffer temp;
@@ -58,13 +78,29 @@ void run_case_with(GemmProvider provider, const Case& c, float beta) {
   BOOST_TEST(worst <= 1.0, gemm_provider_name(provider) << " m=" << c.m << " n=" << c.n << " k=" << c.k << " ta=" << c.ta
                                 << " tb=" << c.tb << " batch=" << c.batch << " beta=" << beta
                                 << ": error/bound " << worst);
+  if (in_arena) {  // nothing written outside C's sub-buffer
+    const auto all = rt.download_floats(arena.get(), arena.bytes() / sizeof(float));
+    size_t nonzero = 0;
+    for (float v : all) nonzero += v != 0.0f;
+    size_t expected = 0;
+    for (const auto* v : {&a, &b}) for (float x : *v) expected += x != 0.0f;
+    for (float x : out) expected += x != 0.0f;
+    BOOST_TEST(nonzero == expected, gemm_provider_name(provider) << ": the arena holds " << nonzero
+                                       << " non-zero floats, A, B and C " << expected);
+  }
+}
+
+std::vector<GemmProvider> providers() {
+  std::vector<GemmProvider> p = {GemmProvider::CLBlast, GemmProvider::Kernels};
+  if (host_gemm_available(test::runtime())) p.push_back(GemmProvider::Host);
+  return p;
 }
 
 // Every case through each provider; the device's own choice is restored afterwards.
 void run_case(const Case& c, float beta) {
   Runtime& rt = test::runtime();
   const GemmProvider chosen = gemm_provider(rt);
-  for (GemmProvider p : {GemmProvider::CLBlast, GemmProvider::Kernels}) run_case_with(p, c, beta);
+  for (GemmProvider p : providers()) run_case_with(p, c, beta);
   set_gemm_provider(rt, chosen);
 }
 
@@ -101,6 +137,46 @@ BOOST_AUTO_TEST_CASE(small_and_ragged_shapes) {
   run_case({true, false, 3, 9, 11, 2}, 1.0f);
   run_case({false, true, 13, 3, 1, 1}, 0.0f);
   run_case({true, true, 9, 5, 7, 1}, 0.0f);
+}
+
+// The executor hands ops sub-buffers of one arena: each provider reads and writes at their
+// offsets and nowhere else.
+BOOST_AUTO_TEST_CASE(sub_buffers_of_an_arena) {
+  Runtime& rt = test::runtime();
+  const GemmProvider chosen = gemm_provider(rt);
+  for (GemmProvider p : providers()) {
+    run_case_with(p, {false, false, 37, 16, 9, 1}, 0.0f, true);
+    run_case_with(p, {false, true, 37, 9, 16, 2}, 1.0f, true);
+    run_case_with(p, {true, false, 9, 16, 37, 2}, 1.0f, true);
+  }
+  set_gemm_provider(rt, chosen);
+}
+
+// The host BLAS runs where the device is a CPU with native kernels and a BLAS was found; a
+// device without them names what is missing instead of computing anything.
+BOOST_AUTO_TEST_CASE(host_provider_availability) {
+  Runtime& rt = test::runtime();
+  if (host_gemm_available(rt)) {
+    BOOST_TEST(rt.is_cpu());
+    BOOST_TEST(!host_blas_library().empty());
+    const GemmProvider chosen = gemm_provider(rt);
+    set_gemm_provider(rt, GemmProvider::Tuned);
+    const GemmArgs untuned{false, false, 4096, 24, 40};  // a shape no cache entry is near
+    if (!tuned_gemm_config(rt, untuned))
+      BOOST_TEST(gemm_choice(rt, untuned).provider == "host",
+                 "without a cache entry a CPU device with a host BLAS takes it");
+    set_gemm_provider(rt, chosen);
+    return;
+  }
+  BOOST_TEST_MESSAGE("no host BLAS provider on " << rt.info().name << " (" << host_blas_library() << ")");
+  const GemmProvider chosen = gemm_provider(rt);
+  set_gemm_provider(rt, GemmProvider::Host);
+  Buffer a = rt.upload_floats({1.0f}), b = rt.upload_floats({2.0f}), c = rt.upload_floats({0.0f});
+  GemmArgs g{false, false, 1, 1, 1, 1.0f, a.get(), 1, 1, b.get(), 1, 1, 0.0f, c.get(), 1, 1, 1};
+  BOOST_CHECK_EXCEPTION(nova::gemm(rt, g), Error, [](const Error& e) {
+    return std::string(e.what()).find("native kernels") != std::string::npos;
+  });
+  set_gemm_provider(rt, chosen);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

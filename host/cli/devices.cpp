@@ -30,6 +30,9 @@ int devices(const Args& args) {
               << (is_chosen ? "  <- chosen" : "") << "\n";
   }
   std::cout << "GEMM tuning for the chosen device: " << gemm_tuning_for(chosen).name << "\n";
+  if (host_gemm_available(chosen))
+    std::cout << "host BLAS for the chosen device: " << host_blas_library()
+              << " (GEMMs without a tuned winner run on it; NOVA_GEMM, NOVA_HOST_BLAS change that)\n";
   return 0;
 }
 

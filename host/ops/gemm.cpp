@@ -10,6 +10,7 @@
 #include <mutex>
 #include <sstream>
 
+#include "gemm_host.hpp"
 #include "op_util.hpp"
 
 namespace nova {
@@ -25,13 +26,7 @@ std::mutex provider_mutex;
 std::map<cl_device_id, GemmProvider> providers;  // chosen or forced, per device
 
 GemmProvider default_provider() {
-  if (const char* env = std::getenv("NOVA_GEMM"); env && *env) {
-    const std::string v = env;
-    if (v == "tuned") return GemmProvider::Tuned;
-    if (v == "clblast") return GemmProvider::CLBlast;
-    if (v == "kernels") return GemmProvider::Kernels;
-    throw Error("NOVA_GEMM='" + v + "' is not one of tuned, clblast, kernels");
-  }
+  if (const char* env = std::getenv("NOVA_GEMM"); env && *env) return parse_gemm_provider(env, "NOVA_GEMM");
   return GemmProvider::Tuned;
 }
 
@@ -253,8 +248,14 @@ GemmConfig choose(Runtime& rt, const GemmArgs& g) {
     case GemmProvider::Kernels:
       if (own_kernels_fit(g)) return GemmConfig{"kernels", {}};
       return table_config();
+    case GemmProvider::Host:
+      return GemmConfig{"host", {}};
     case GemmProvider::Tuned:
       if (auto c = tuned_gemm_config(rt, g)) return *c;
+      // Without a measured winner a CPU device takes its host BLAS: on a 2-core AVX-512
+      // Xeon it ran the MLP layers' products 2-4x faster than the untuned device kernels
+      // (README, "Speed"); a GPU (or a CPU without one) keeps the table's CLBlast.
+      if (host_gemm_available(rt)) return GemmConfig{"host", {}};
       return table_config();
     case GemmProvider::CLBlast:
       break;
@@ -268,9 +269,16 @@ const char* gemm_provider_name(GemmProvider p) {
   switch (p) {
     case GemmProvider::Kernels: return "kernels";
     case GemmProvider::CLBlast: return "clblast";
+    case GemmProvider::Host: return "host";
     case GemmProvider::Tuned: break;
   }
   return "tuned";
+}
+
+GemmProvider parse_gemm_provider(const std::string& name, const std::string& what) {
+  for (GemmProvider p : {GemmProvider::Tuned, GemmProvider::CLBlast, GemmProvider::Kernels, GemmProvider::Host})
+    if (name == gemm_provider_name(p)) return p;
+  throw Error(what + "='" + name + "' is not one of tuned, clblast, kernels, host");
 }
 
 GemmProvider gemm_provider(Runtime& rt) {
@@ -295,8 +303,9 @@ GemmConfig GemmConfig::parse(const std::string& text) {
   std::istringstream in(text);
   GemmConfig c;
   if (!(in >> c.provider) ||
-      (c.provider != "clblast" && c.provider != "kernels" && c.provider != "blocked"))
-    throw Error("'" + text + "' is no GEMM configuration (clblast|kernels|blocked KEY=VALUE...)");
+      (c.provider != "clblast" && c.provider != "kernels" && c.provider != "blocked" &&
+       c.provider != "host"))
+    throw Error("'" + text + "' is no GEMM configuration (clblast|kernels|blocked|host KEY=VALUE...)");
   for (std::string item; in >> item;) {
     const size_t eq = item.find('=');
     size_t used = 0;
@@ -311,8 +320,8 @@ GemmConfig GemmConfig::parse(const std::string& text) {
       throw Error("'" + text + "': '" + item + "' is not KEY=unsigned integer");
     c.params[item.substr(0, eq)] = static_cast<size_t>(v);
   }
-  if (c.provider == "kernels" && !c.params.empty())
-    throw Error("'" + text + "': the kernels provider takes no parameters");
+  if ((c.provider == "kernels" || c.provider == "host") && !c.params.empty())
+    throw Error("'" + text + "': the " + c.provider + " provider takes no parameters");
   if (c.provider == "blocked") blocked_params(c);  // validates
   return c;
 }
@@ -337,6 +346,7 @@ void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem tem
     return own_gemm(rt, g, temp, epi);
   }
   if (cfg.provider == "blocked") return blocked_gemm(rt, cfg, g, temp, epi);
+  if (cfg.provider == "host") return host_gemm(rt, g);
   if (cfg.provider == "clblast") return clblast_gemm(rt, cfg, g, temp);
   throw Error("unknown GEMM provider '" + cfg.provider + "'");
 }
@@ -345,6 +355,7 @@ size_t gemm_temp_bytes_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& 
   configure_gemm(rt);
   if (cfg.provider == "kernels") return own_temp_floats(g) * sizeof(float);
   if (cfg.provider == "blocked") return blocked_temp_floats(g, blocked_params(cfg)) * sizeof(float);
+  if (cfg.provider == "host") return 0;
   return clblast_temp_bytes(rt, cfg, g);
 }
 

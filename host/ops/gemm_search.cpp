@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "nova/gemm.hpp"
+#include "gemm_host.hpp"
 
 namespace nova {
 namespace {
@@ -146,6 +147,7 @@ std::vector<GemmCandidate> gemm_candidates(Runtime& rt, const GemmShapeClass& sh
         ++taken;
       }
   c.push_back({GemmConfig{"kernels", {}}, {}});
+  if (host_gemm_available(rt)) c.push_back({GemmConfig{"host", {}}, {}});
   // Blocked kernels: RM x 8 VN accumulators fit 16 AVX2 / 32 AVX-512 registers up to 12.
   std::vector<std::pair<size_t, size_t>> blocks =
       quick ? std::vector<std::pair<size_t, size_t>>{{6, 2}, {4, 2}}

@@ -5,17 +5,20 @@
 //    or, for one shape, from an explicit set of Xgemm parameters (clblast::OverrideParameters);
 //  - "kernels": nova's first own kernels (gemm_nn / gemm_tn of kernels/gemm.cl);
 //  - "blocked": nova's register-blocked kernel (gemm_blk: float8 vectors, RM x 8VN blocks of
-//    C per work-item, the reduction split in KC chunks for the weight gradient).
+//    C per work-item, the reduction split in KC chunks for the weight gradient);
+//  - "host": on a CPU device with native kernels, the host BLAS's cblas_sgemm (OpenBLAS, BLIS
+//    or MKL, loaded at run time; NOVA_HOST_BLAS=PATH|off) run in queue order on the buffers'
+//    shared memory (gemm_host.cpp).
 // Which one runs is chosen per device and shape by measurement: `nova tune` searches
 // candidates of each provider, checks each against a float64 host reference, and writes the
 // winners to the tuning cache (gemm_tuning_cache_path), read at start-up by configure_gemm.
-// NOVA_GEMM=tuned|clblast|kernels forces a mode: tuned (the default) takes the cache's winner
-// for the shape and the table's CLBlast for shapes without one; clblast ignores the cache. A
-// transposed-A-and-B product always goes to CLBlast.
+// NOVA_GEMM=tuned|clblast|kernels|host forces a mode: tuned (the default) takes the cache's
+// winner for the shape, else the host BLAS where the device has one, else the table's CLBlast;
+// clblast ignores the cache. A transposed-A-and-B product goes to CLBlast (or the host BLAS).
 //
 // A forward layer may ask for an epilogue, C = act(alpha op(A) op(B) + beta C + bias): nova's
 // own kernels apply it as they store C (after a split reduction's sum, never to a partial), so
-// the output is written once; CLBlast cannot, and gets a second pass over C (bias_act_forward
+// the output is written once; CLBlast and the host BLAS cannot, and get a second pass over C (bias_act_forward
 // of kernels/activation.cl, in place).
 #include <cstddef>
 #include <functional>
@@ -55,12 +58,22 @@ struct GemmArgs {
   size_t batch = 1;
 };
 
-enum class GemmProvider { Tuned, CLBlast, Kernels };
-const char* gemm_provider_name(GemmProvider p);  // "tuned", "clblast", "kernels"
+enum class GemmProvider { Tuned, CLBlast, Kernels, Host };
+const char* gemm_provider_name(GemmProvider p);  // "tuned", "clblast", "kernels", "host"
+// The provider named `name` (gemm_provider_name's forms); Error listing them otherwise, with
+// `what` (e.g. "NOVA_GEMM") naming where the name came from.
+GemmProvider parse_gemm_provider(const std::string& name, const std::string& what);
 // The provider this runtime's GEMMs use (NOVA_GEMM, else tuned); Error on a bad NOVA_GEMM.
 GemmProvider gemm_provider(Runtime& rt);
 // Forces a provider for this runtime (benchmarks and tests compare them in one process).
 void set_gemm_provider(Runtime& rt, GemmProvider p);
+
+// The "host" provider: whether the device is a CPU that runs native kernels and an optimised
+// BLAS was found (NOVA_HOST_BLAS: a library to load instead of the search, or "off"), and the
+// library that was loaded ("" when none). Error when NOVA_HOST_BLAS names no loadable BLAS.
+bool host_gemm_available(const DeviceInfo& device);
+inline bool host_gemm_available(Runtime& rt) { return host_gemm_available(rt.info()); }
+std::string host_blas_library();
 
 // Runs the GEMM and the epilogue, if any; `temp` (gemm_temp_bytes large) avoids an
 // allocation per call.

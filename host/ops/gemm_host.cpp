@@ -1,0 +1,167 @@
+// The "host" GEMM provider of CPU OpenCL devices: the product runs as a native kernel
+// (clEnqueueNativeKernel) on the device's own in-order queue and calls the host BLAS's
+// cblas_sgemm on the buffers' memory, which a CPU device shares with the host, so nothing is
+// copied and the op stays in queue order with the kernels around it. The BLAS is loaded at
+// run time (dlopen), so nova_core links OpenCL and CLBlast alone and a machine without an
+// optimised BLAS simply has no "host" provider.
+#include "gemm_host.hpp"
+
+#include <dlfcn.h>
+
+#include <cstdlib>
+#include <mutex>
+#include <string>
+#include <utility>
+
+#include "op_util.hpp"
+
+namespace nova {
+namespace {
+
+// CBLAS's enum values (cblas.h), fixed by the standard interface.
+constexpr int kRowMajor = 101, kNoTrans = 111, kTrans = 112;
+using SgemmFn = void (*)(int, int, int, int, int, int, float, const float*, int, const float*,
+                         int, float, float*, int);
+
+struct HostBlas {
+  SgemmFn sgemm = nullptr;
+  std::string library;  // the file that was loaded; empty when none
+};
+
+// Optimised BLAS libraries only: the reference BLAS (libblas.so.3) is slower than the
+// device's own kernels and is never taken by itself.
+const char* const kCandidates[] = {"libopenblas.so.0", "libopenblas.so", "libblis.so.4",
+                                   "libblis.so", "libmkl_rt.so.2", "libmkl_rt.so"};
+
+HostBlas load_host_blas() {
+  HostBlas h;
+  const char* env = std::getenv("NOVA_HOST_BLAS");
+  const std::string choice = env ? env : "";
+  if (choice == "off") return h;
+  auto try_load = [&](const std::string& name) {
+    void* lib = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!lib) return false;
+    auto fn = reinterpret_cast<SgemmFn>(dlsym(lib, "cblas_sgemm"));
+    if (!fn) {
+      dlclose(lib);
+      return false;
+    }
+    h.sgemm = fn;
+    h.library = name;
+    return true;  // the library stays loaded for the life of the process
+  };
+  if (!choice.empty()) {
+    if (!try_load(choice))
+      throw Error("NOVA_HOST_BLAS='" + choice + "': cannot load it or it has no cblas_sgemm (" +
+                  std::string(dlerror() ? dlerror() : "no error text") + "); use a library path or 'off'");
+    return h;
+  }
+  for (const char* name : kCandidates)
+    if (try_load(name)) break;
+  return h;
+}
+
+const HostBlas& host_blas() {
+  static const HostBlas h = load_host_blas();
+  return h;
+}
+
+// What the native kernel receives: the runtime copies this struct and replaces the cl_mem
+// handles in `mem` by the buffers' host addresses. They are the distinct allocations that A,
+// B and C live in (operand i is mem[index[i]] + offset[i]): PoCL 3.1 hands a native kernel a
+// sub-buffer's address without its origin, and stalls when one buffer is listed twice.
+struct HostGemmCall {
+  void* mem[3];  // cl_mem handles, then host addresses
+  int index[3];
+  size_t offset[3];
+  SgemmFn sgemm;
+  int trans_a, trans_b;
+  int m, n, k;
+  float alpha, beta;
+  int lda, ldb, ldc;
+  size_t stride_a, stride_b, stride_c, batch;
+};
+
+void CL_CALLBACK run_host_gemm(void* p) {
+  const HostGemmCall& g = *static_cast<const HostGemmCall*>(p);
+  auto operand = [&](int i) {
+    return reinterpret_cast<float*>(static_cast<char*>(g.mem[g.index[i]]) + g.offset[i]);
+  };
+  const float* a = operand(0);
+  const float* b = operand(1);
+  float* c = operand(2);
+  for (size_t i = 0; i < g.batch; ++i)
+    g.sgemm(kRowMajor, g.trans_a ? kTrans : kNoTrans, g.trans_b ? kTrans : kNoTrans, g.m, g.n,
+            g.k, g.alpha, a + i * g.stride_a, g.lda, b + i * g.stride_b, g.ldb, g.beta,
+            c + i * g.stride_c, g.ldc);
+}
+
+int as_int(size_t v, const char* what) {
+  if (v > 0x7fffffffu) throw Error(std::string("host GEMM: ") + what + " exceeds a BLAS int", kExitInternal);
+  return static_cast<int>(v);
+}
+
+// The allocation `m` lives in and its byte offset there (the buffer itself and 0 when it is
+// no sub-buffer).
+std::pair<cl_mem, size_t> root_of(cl_mem m) {
+  size_t offset = 0;
+  for (;;) {
+    cl_mem parent = nullptr;
+    cl_check(clGetMemObjectInfo(m, CL_MEM_ASSOCIATED_MEMOBJECT, sizeof(parent), &parent, nullptr),
+             "clGetMemObjectInfo(CL_MEM_ASSOCIATED_MEMOBJECT)");
+    if (!parent) return {m, offset};
+    size_t origin = 0;
+    cl_check(clGetMemObjectInfo(m, CL_MEM_OFFSET, sizeof(origin), &origin, nullptr),
+             "clGetMemObjectInfo(CL_MEM_OFFSET)");
+    offset += origin;
+    m = parent;
+  }
+}
+
+}  // namespace
+
+bool host_gemm_available(const DeviceInfo& device) {
+  if (!(device.type & CL_DEVICE_TYPE_CPU) || !host_blas().sgemm) return false;
+  cl_device_exec_capabilities caps = 0;
+  if (clGetDeviceInfo(device.device, CL_DEVICE_EXECUTION_CAPABILITIES, sizeof(caps), &caps, nullptr) !=
+      CL_SUCCESS)
+    return false;
+  return (caps & CL_EXEC_NATIVE_KERNEL) != 0;
+}
+
+std::string host_blas_library() { return host_blas().library; }
+
+void host_gemm(Runtime& rt, const GemmArgs& g) {
+  if (!host_gemm_available(rt))
+    throw Error("GEMM provider 'host': device " + rt.info().name +
+                    " cannot run it (it needs a CPU device with native kernels and an optimised "
+                    "host BLAS: OpenBLAS, BLIS or MKL; NOVA_HOST_BLAS names one)");
+  HostGemmCall call{{}, {}, {}, host_blas().sgemm,
+                    g.trans_a, g.trans_b,
+                    as_int(g.m, "m"), as_int(g.n, "n"), as_int(g.k, "k"),
+                    g.alpha, g.beta,
+                    as_int(g.lda, "lda"), as_int(g.ldb, "ldb"), as_int(g.ldc, "ldc"),
+                    g.stride_a, g.stride_b, g.stride_c, g.batch};
+  cl_mem mems[3];
+  const void* locs[3];
+  cl_uint count = 0;
+  const cl_mem operands[3] = {g.a, g.b, g.c};
+  for (int i = 0; i < 3; ++i) {
+    const auto [root, offset] = root_of(operands[i]);
+    cl_uint j = 0;
+    while (j < count && mems[j] != root) ++j;
+    if (j == count) {
+      mems[count] = root;
+      call.mem[count] = root;
+      locs[count] = &call.mem[count];
+      ++count;
+    }
+    call.index[i] = static_cast<int>(j);
+    call.offset[i] = offset;
+  }
+  cl_check(clEnqueueNativeKernel(rt.queue(), run_host_gemm, &call, sizeof(call), count, mems,
+                                 locs, 0, nullptr, nullptr),
+           "clEnqueueNativeKernel(host GEMM)");
+}
+
+}  // namespace nova
