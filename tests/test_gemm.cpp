@@ -152,6 +152,36 @@ BOOST_AUTO_TEST_CASE(sub_buffers_of_an_arena) {
   set_gemm_provider(rt, chosen);
 }
 
+// The three GEMMs of a layer step at growing sizes, each output a buffer no command has touched
+// yet, the buffers released and allocated anew between sizes: a provider that addresses
+// memory behind the runtime's back must still find it (checked against float64 sums).
+BOOST_AUTO_TEST_CASE(fresh_outputs_and_reused_memory) {
+  Runtime& rt = test::runtime();
+  const GemmProvider chosen = gemm_provider(rt);
+  for (GemmProvider p : providers()) {
+    set_gemm_provider(rt, p);
+    for (size_t m : {64u, 1031u, 8192u}) {
+      const size_t w = 64;
+      Buffer x = rt.upload_floats(std::vector<float>(m * w, 0.5f));
+      Buffer wt = rt.upload_floats(std::vector<float>(w * w, 0.25f));
+      Buffer y = rt.alloc(m * w * sizeof(float)), dx = rt.alloc(m * w * sizeof(float));
+      Buffer dw = rt.alloc(w * w * sizeof(float));
+      nova::gemm(rt, {false, false, m, w, w, 1.0f, x.get(), w, m * w, wt.get(), w, w * w, 0.0f, y.get(), w, m * w, 1});
+      nova::gemm(rt, {false, true, m, w, w, 1.0f, y.get(), w, m * w, wt.get(), w, w * w, 0.0f, dx.get(), w, m * w, 1});
+      nova::gemm(rt, {true, false, w, w, m, 1.0f, x.get(), w, m * w, y.get(), w, m * w, 0.0f, dw.get(), w, w * w, 1});
+      // y = 64 * 0.5 * 0.25 = 8, dx = 64 * 8 * 0.25 = 128, dw = m * 0.5 * 8 = 4 m: exact in float.
+      const auto hy = rt.download_floats(y.get(), m * w), hdx = rt.download_floats(dx.get(), m * w);
+      const auto hdw = rt.download_floats(dw.get(), w * w);
+      size_t wrong = 0;
+      for (float v : hy) wrong += v != 8.0f;
+      for (float v : hdx) wrong += v != 128.0f;
+      for (float v : hdw) wrong += v != 4.0f * static_cast<float>(m);
+      BOOST_TEST(wrong == 0u, gemm_provider_name(p) << " m=" << m << ": " << wrong << " wrong values");
+    }
+  }
+  set_gemm_provider(rt, chosen);
+}
+
 // The host BLAS runs where the device is a CPU with native kernels and a BLAS was found; a
 // device without them names what is missing instead of computing anything.
 BOOST_AUTO_TEST_CASE(host_provider_availability) {

@@ -11,7 +11,6 @@
 #include <cstdlib>
 #include <mutex>
 #include <string>
-#include <utility>
 
 #include "op_util.hpp"
 
@@ -66,14 +65,14 @@ const HostBlas& host_blas() {
   return h;
 }
 
-// What the native kernel receives: the runtime copies this struct and replaces the cl_mem
-// handles in `mem` by the buffers' host addresses. They are the distinct allocations that A,
-// B and C live in (operand i is mem[index[i]] + offset[i]): PoCL 3.1 hands a native kernel a
-// sub-buffer's address without its origin, and stalls when one buffer is listed twice.
+// What the native kernel receives (copied by the runtime): the operands' host addresses.
+// No cl_mem goes through the call's memory list: PoCL 3.1 resolves those when the command is
+// enqueued, without a sub-buffer's origin and before a fresh buffer has memory. The addresses
+// come from CL_MEM_HOST_PTR instead (Runtime::alloc backs CPU buffers with host memory).
 struct HostGemmCall {
-  void* mem[3];  // cl_mem handles, then host addresses
-  int index[3];
-  size_t offset[3];
+  const float* a;
+  const float* b;
+  float* c;
   SgemmFn sgemm;
   int trans_a, trans_b;
   int m, n, k;
@@ -84,16 +83,10 @@ struct HostGemmCall {
 
 void CL_CALLBACK run_host_gemm(void* p) {
   const HostGemmCall& g = *static_cast<const HostGemmCall*>(p);
-  auto operand = [&](int i) {
-    return reinterpret_cast<float*>(static_cast<char*>(g.mem[g.index[i]]) + g.offset[i]);
-  };
-  const float* a = operand(0);
-  const float* b = operand(1);
-  float* c = operand(2);
   for (size_t i = 0; i < g.batch; ++i)
     g.sgemm(kRowMajor, g.trans_a ? kTrans : kNoTrans, g.trans_b ? kTrans : kNoTrans, g.m, g.n,
-            g.k, g.alpha, a + i * g.stride_a, g.lda, b + i * g.stride_b, g.ldb, g.beta,
-            c + i * g.stride_c, g.ldc);
+            g.k, g.alpha, g.a + i * g.stride_a, g.lda, g.b + i * g.stride_b, g.ldb, g.beta,
+            g.c + i * g.stride_c, g.ldc);
 }
 
 int as_int(size_t v, const char* what) {
@@ -101,21 +94,15 @@ int as_int(size_t v, const char* what) {
   return static_cast<int>(v);
 }
 
-// The allocation `m` lives in and its byte offset there (the buffer itself and 0 when it is
-// no sub-buffer).
-std::pair<cl_mem, size_t> root_of(cl_mem m) {
-  size_t offset = 0;
-  for (;;) {
-    cl_mem parent = nullptr;
-    cl_check(clGetMemObjectInfo(m, CL_MEM_ASSOCIATED_MEMOBJECT, sizeof(parent), &parent, nullptr),
-             "clGetMemObjectInfo(CL_MEM_ASSOCIATED_MEMOBJECT)");
-    if (!parent) return {m, offset};
-    size_t origin = 0;
-    cl_check(clGetMemObjectInfo(m, CL_MEM_OFFSET, sizeof(origin), &origin, nullptr),
-             "clGetMemObjectInfo(CL_MEM_OFFSET)");
-    offset += origin;
-    m = parent;
-  }
+// The host address of a buffer (or sub-buffer) that Runtime::alloc made on a CPU device.
+float* host_address(cl_mem m, const char* operand) {
+  void* p = nullptr;
+  cl_check(clGetMemObjectInfo(m, CL_MEM_HOST_PTR, sizeof(p), &p, nullptr), "clGetMemObjectInfo(CL_MEM_HOST_PTR)");
+  if (!p)
+    throw Error(std::string("host GEMM: operand ") + operand +
+                    " is a buffer without host memory (not from Runtime::alloc on a CPU device)",
+                kExitInternal);
+  return static_cast<float*>(p);
 }
 
 }  // namespace
@@ -136,31 +123,15 @@ void host_gemm(Runtime& rt, const GemmArgs& g) {
     throw Error("GEMM provider 'host': device " + rt.info().name +
                     " cannot run it (it needs a CPU device with native kernels and an optimised "
                     "host BLAS: OpenBLAS, BLIS or MKL; NOVA_HOST_BLAS names one)");
-  HostGemmCall call{{}, {}, {}, host_blas().sgemm,
-                    g.trans_a, g.trans_b,
-                    as_int(g.m, "m"), as_int(g.n, "n"), as_int(g.k, "k"),
-                    g.alpha, g.beta,
-                    as_int(g.lda, "lda"), as_int(g.ldb, "ldb"), as_int(g.ldc, "ldc"),
-                    g.stride_a, g.stride_b, g.stride_c, g.batch};
-  cl_mem mems[3];
-  const void* locs[3];
-  cl_uint count = 0;
-  const cl_mem operands[3] = {g.a, g.b, g.c};
-  for (int i = 0; i < 3; ++i) {
-    const auto [root, offset] = root_of(operands[i]);
-    cl_uint j = 0;
-    while (j < count && mems[j] != root) ++j;
-    if (j == count) {
-      mems[count] = root;
-      call.mem[count] = root;
-      locs[count] = &call.mem[count];
-      ++count;
-    }
-    call.index[i] = static_cast<int>(j);
-    call.offset[i] = offset;
-  }
-  cl_check(clEnqueueNativeKernel(rt.queue(), run_host_gemm, &call, sizeof(call), count, mems,
-                                 locs, 0, nullptr, nullptr),
+  const HostGemmCall call{host_address(g.a, "A"), host_address(g.b, "B"), host_address(g.c, "C"),
+                          host_blas().sgemm,
+                          g.trans_a, g.trans_b,
+                          as_int(g.m, "m"), as_int(g.n, "n"), as_int(g.k, "k"),
+                          g.alpha, g.beta,
+                          as_int(g.lda, "lda"), as_int(g.ldb, "ldb"), as_int(g.ldc, "ldc"),
+                          g.stride_a, g.stride_b, g.stride_c, g.batch};
+  cl_check(clEnqueueNativeKernel(rt.queue(), run_host_gemm, const_cast<HostGemmCall*>(&call),
+                                 sizeof(call), 0, nullptr, nullptr, 0, nullptr, nullptr),
            "clEnqueueNativeKernel(host GEMM)");
 }
 

@@ -1,4 +1,5 @@
 // Context, queue, program cache and buffers of one device.
+#include <cstdlib>
 #include <algorithm>
 #include <cstring>
 
@@ -110,7 +111,26 @@ size_t Runtime::work_group_size(cl_kernel kernel) {
 
 Buffer Runtime::alloc(size_t bytes) {
   cl_int st = CL_SUCCESS;
-  cl_mem m = clCreateBuffer(context_, CL_MEM_READ_WRITE, std::max<size_t>(bytes, 4), nullptr, &st);
+  cl_mem m = nullptr;
+  if (is_cpu()) {
+    // A CPU device's buffers live in memory nova allocates (CL_MEM_USE_HOST_PTR, which PoCL
+    // uses in place), so that host code run in queue order (the host BLAS's native kernel,
+    // gemm_host.cpp) can address them and their sub-buffers through CL_MEM_HOST_PTR. The
+    // memory is freed when the runtime releases the buffer.
+    constexpr size_t kAlign = 4096;
+    const size_t size = (std::max<size_t>(bytes, 4) + kAlign - 1) / kAlign * kAlign;
+    void* host = std::aligned_alloc(kAlign, size);
+    if (!host)
+      throw Error("cannot allocate " + std::to_string(bytes) + " bytes of host memory for " + info_.name,
+                  kExitInternal);
+    m = clCreateBuffer(context_, CL_MEM_READ_WRITE | CL_MEM_USE_HOST_PTR, size, host, &st);
+    if (st == CL_SUCCESS)
+      st = clSetMemObjectDestructorCallback(m, [](cl_mem, void* p) { std::free(p); }, host);
+    else
+      std::free(host);
+  } else {
+    m = clCreateBuffer(context_, CL_MEM_READ_WRITE, std::max<size_t>(bytes, 4), nullptr, &st);
+  }
   if (st != CL_SUCCESS)
     throw Error("cannot allocate " + std::to_string(bytes) + " bytes on " + info_.name + ": " +
                     cl_status_name(st),
