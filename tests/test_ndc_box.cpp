@@ -91,6 +91,9 @@ BOOST_AUTO_TEST_CASE(scene_field_takes_the_box_from_the_rays_unless_told_not_to)
   const RayGeometry g = ray_geometry(ndc_scene({{0.0, 0.0}, {-0.1, 0.0}}));
   FieldConfig f = preset_config("quick").field;
   BOOST_TEST(f.hash.bound == 0.0f);
+  BOOST_TEST(!f.ndc_box_from_rays);
+  BOOST_TEST(scene_field(f, g).hash.bound == 1.0f);
+  f.ndc_box_from_rays = true;
   BOOST_TEST(scene_field(f, g).hash.bound == g.extent);
   f.ndc_box_from_rays = false;
   BOOST_TEST(scene_field(f, g).hash.bound == 1.0f);
@@ -99,14 +102,17 @@ BOOST_AUTO_TEST_CASE(scene_field_takes_the_box_from_the_rays_unless_told_not_to)
 }
 
 BOOST_AUTO_TEST_CASE(a_run_file_without_the_option_keeps_the_unit_box) {
-  std::string text = format_config(preset_config("quick"));
+  TrainConfig c = preset_config("quick");
+  c.field.ndc_box_from_rays = true;
+  std::string text = format_config(c);
   const std::string key = "\nhash-ndc-box-from-rays = ";
   const size_t at = text.find(key);
   BOOST_REQUIRE(at != std::string::npos);
   BOOST_TEST(parse_config_text(text, "config.ini", nullptr, ConfigFile::RunFile).field.ndc_box_from_rays);
   text.erase(at + 1, text.find('\n', at + 1) - at);
   BOOST_TEST(!parse_config_text(text, "config.ini", nullptr, ConfigFile::RunFile).field.ndc_box_from_rays);
-  BOOST_TEST(parse_config_text(text, "mine.ini").field.ndc_box_from_rays);
+  // A partial configuration without it takes the preset's value.
+  BOOST_TEST(parse_config_text(text, "mine.ini").field.ndc_box_from_rays == preset_config("quick").field.ndc_box_from_rays);
 }
 
 BOOST_AUTO_TEST_SUITE_END()
