@@ -42,7 +42,7 @@ struct FieldConfig {
   // ray (RayGeometry::extent: more than 1 where the camera moves sideways), or with false to
   // 1, the reference camera's frustum, which clamps what moved cameras see beyond it (streaks
   // at the image edge). The box is a cube, so holding a wider x also coarsens y and z: on the
-  // default synthetic scene and family test seeds 101 and 102 that cost 3.5, 0.7 and 7.7 dB
+  // default synthetic scene and family test seeds 101 and 102 that cost 3.5, 2.8 and 7.1 dB
   // (README, "Accuracy"), so false is the default.
   bool ndc_box_from_rays = false;
   // Finest cells per dimension of the object NeRFs' hash grid (0: hash.max_resolution). An
