@@ -9,6 +9,7 @@
 
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
+#include "nova/gemm.hpp"
 #include "nova/progress_line.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene_io.hpp"
@@ -78,6 +79,13 @@ int train(const Args& args) {
             << scene.frames[0].rgb.width << "x" << scene.frames[0].rgb.height << ", 1 + " << scene.num_objects
             << " NeRFs, preset " << config.preset << ", " << config.pretrain_steps << " + " << config.steps
             << " steps on " << device.name << "\n";
+  // Which GEMMs run matters for speed (and, through rounding, for the exact numbers).
+  const GemmProvider gemms = gemm_provider(rt);
+  std::cerr << "GEMMs: " << gemm_provider_name(gemms);
+  if (gemms == GemmProvider::Tuned)
+    std::cerr << " (the tuning cache's winners, else "
+              << (host_gemm_available(rt) ? "the host BLAS " + host_blas_library() : std::string("CLBlast")) << ")";
+  std::cerr << "\n";
   const bool created = !fs::exists(out);
   try {
     Trainer trainer(rt, scene, config, out);
