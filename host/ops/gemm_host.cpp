@@ -37,11 +37,17 @@ HostBlas load_host_blas() {
   const char* env = std::getenv("NOVA_HOST_BLAS");
   const std::string choice = env ? env : "";
   if (choice == "off") return h;
+  std::string why;  // dlopen's or dlsym's error text of the last failed attempt
   auto try_load = [&](const std::string& name) {
     void* lib = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (!lib) return false;
+    if (!lib) {
+      const char* e = dlerror();
+      why = e ? e : "dlopen failed";
+      return false;
+    }
     auto fn = reinterpret_cast<SgemmFn>(dlsym(lib, "cblas_sgemm"));
     if (!fn) {
+      why = "no cblas_sgemm in it";
       dlclose(lib);
       return false;
     }
@@ -51,8 +57,7 @@ HostBlas load_host_blas() {
   };
   if (!choice.empty()) {
     if (!try_load(choice))
-      throw Error("NOVA_HOST_BLAS='" + choice + "': cannot load it or it has no cblas_sgemm (" +
-                  std::string(dlerror() ? dlerror() : "no error text") + "); use a library path or 'off'");
+      throw Error("NOVA_HOST_BLAS='" + choice + "': " + why + " (give a BLAS library with cblas_sgemm, or 'off')");
     return h;
   }
   for (const char* name : kCandidates)
