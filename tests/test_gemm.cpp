@@ -7,7 +7,6 @@
 
 #include "harness.hpp"
 #include "nova/gemm.hpp"
-#include "ops/gemm_host.hpp"
 
 using namespace nova;
 

@@ -9,7 +9,6 @@
 #include <dlfcn.h>
 
 #include <cstdlib>
-#include <mutex>
 #include <string>
 
 #include "op_util.hpp"
@@ -113,12 +112,7 @@ float* host_address(cl_mem m, const char* operand) {
 }  // namespace
 
 bool host_gemm_available(const DeviceInfo& device) {
-  if (!(device.type & CL_DEVICE_TYPE_CPU) || !host_blas().sgemm) return false;
-  cl_device_exec_capabilities caps = 0;
-  if (clGetDeviceInfo(device.device, CL_DEVICE_EXECUTION_CAPABILITIES, sizeof(caps), &caps, nullptr) !=
-      CL_SUCCESS)
-    return false;
-  return (caps & CL_EXEC_NATIVE_KERNEL) != 0;
+  return (device.type & CL_DEVICE_TYPE_CPU) && device.native_kernels && host_blas().sgemm;
 }
 
 std::string host_blas_library() { return host_blas().library; }

@@ -9,7 +9,6 @@
 #include <sstream>
 
 #include "nova/gemm.hpp"
-#include "gemm_host.hpp"
 
 namespace nova {
 namespace {

@@ -110,6 +110,9 @@ std::vector<DeviceInfo> list_devices() {
           device_value<cl_uint>(devices[d], CL_DEVICE_MEM_BASE_ADDR_ALIGN) / 8;
       info.fp64 = device_value<cl_device_fp_config>(devices[d], CL_DEVICE_DOUBLE_FP_CONFIG) != 0;
       info.unified_memory = device_value<cl_bool>(devices[d], CL_DEVICE_HOST_UNIFIED_MEMORY);
+      info.native_kernels =
+          (device_value<cl_device_exec_capabilities>(devices[d], CL_DEVICE_EXECUTION_CAPABILITIES) &
+           CL_EXEC_NATIVE_KERNEL) != 0;
       out.push_back(std::move(info));
     }
   }

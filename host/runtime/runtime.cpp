@@ -1,6 +1,6 @@
 // Context, queue, program cache and buffers of one device.
-#include <cstdlib>
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 
 #include "nova/kernel_sources.hpp"

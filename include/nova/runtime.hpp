@@ -36,6 +36,7 @@ struct DeviceInfo {
   cl_uint base_addr_align_bytes = 0;
   bool fp64 = false;
   bool unified_memory = false;
+  bool native_kernels = false;  // CL_EXEC_NATIVE_KERNEL: runs host functions in queue order
 
   std::string type_name() const;  // "GPU", "CPU", "ACCELERATOR", ...
   std::string id() const;         // "P:D", the selector form
