@@ -29,3 +29,12 @@ __kernel void gate_rows_back(__global const float* dy, __global const float* gat
   const float g = dy[i] * gate[offset + i / cols / group];
   dx[i] = accumulate ? dx[i] + g : g;
 }
+
+// out[b, m, c] = x[b, c]: one row per batch repeated `rows` times (a per-group constant, such
+// as each object's time, spread over its samples on the device).
+__kernel void repeat_rows(__global const float* x, __global float* out, uint batches, uint rows,
+                          uint cols) {
+  const uint i = get_global_id(0);
+  if (i >= batches * rows * cols) return;
+  out[i] = x[(i / (rows * cols)) * cols + i % cols];
+}

@@ -35,6 +35,7 @@
 #include "nova/losses.hpp"
 #include "nova/ops.hpp"
 #include "nova/optim.hpp"
+#include "nova/random.hpp"
 #include "nova/rays.hpp"
 #include "nova/render.hpp"
 #include "conventions_reference.hpp"
@@ -265,6 +266,37 @@ BOOST_AUTO_TEST_CASE(tensor_copies) {
   for (size_t i = 0; i < x.size(); ++i) dx_ref[i] = gup[i] * gate[kRows + i / 15];
   expect_close(gout, test::to_double(x), 0, 0, "gradient_gate forward is an exact copy");
   expect_grad_close(gex.get_grad(tx), dx_ref, "d gradient_gate / d x");
+
+  // repeat_rows [3, 2] -> [3, kRows, 2] (a copy: exact), and random.cl's two draws of kRows
+  // values: uniform is exact; normal's log/sqrt/cos/sin are within 4 ulp each (2e-6 + 2e-6 |x|,
+  // as tests/test_device_random.cpp states).
+  const auto small = random_floats(6, -1, 1, 127);
+  Graph rg;
+  Tensor ts = rg.input("per_batch", Shape{3, 2});
+  Tensor rep = repeat_rows(ts, kRows);
+  auto counter = std::make_shared<DrawCounter>();
+  counter->value = 3;
+  Tensor u = random_uniform(rg, "u", Shape{kRows}, {5, 1, counter});
+  Tensor z = random_normal(rg, "z", Shape{kRows}, {5, 2, counter});
+  for (Tensor t : {rep, u, z}) rg.keep(t);
+  Executor rex(rt(), rg);
+  rex.set(ts, small);
+  rex.forward();
+  std::vector<double> rep_ref, u_ref, z_ref;
+  for (size_t b = 0; b < 3; ++b)
+    for (size_t r = 0; r < kRows; ++r) rep_ref.push_back(small[b * 2]), rep_ref.push_back(small[b * 2 + 1]);
+  for (size_t i = 0; i < kRows; ++i) {
+    const auto bu = philox4x32_10({uint32_t(i / 4), 0, 3, 0}, {5, 1});
+    const auto bz = philox4x32_10({uint32_t(i / 4), 0, 3, 0}, {5, 2});
+    u_ref.push_back((bu[i % 4] >> 8) / 16777216.0);
+    const size_t pair = (i % 4) / 2;
+    const double rad = std::sqrt(-2.0 * std::log(((bz[2 * pair] >> 8) + 1) / 16777216.0));
+    const double theta = 2.0 * M_PI * (bz[2 * pair + 1] >> 8) / 16777216.0;
+    z_ref.push_back(rad * (i % 2 == 0 ? std::cos(theta) : std::sin(theta)));
+  }
+  expect_close(rex.get(rep), rep_ref, 0, 0, "repeat_rows is an exact copy");
+  expect_close(rex.get(u), u_ref, 0, 0, "random_uniform");
+  expect_close(rex.get(z), z_ref, 2e-6, 2e-6, "random_normal");
 }
 
 // loss.cl: every loss forward and backward (mse: sq_err_*; masked_mse: masked_sq_err_*;

@@ -208,6 +208,49 @@ BOOST_AUTO_TEST_CASE(reference_conventions_train_and_resume) {
     BOOST_TEST(same_bits(a.arrays[i].values, b.arrays[i].values), "array " << a.arrays[i].name);
 }
 
+// The hot path of a training step makes no blocking read of a per-sample buffer: packing,
+// jitter, density noise and the objects' times all stay on the device. Measured per step
+// through the runtime's transfer counters (the progress callback runs after every step with
+// log_every 1 and resets them). Allowed per step: reads of at most 4 values (each pack op's
+// per-batch counts, at most 2 here, and the logged scalars), writes of per-ray data only (the
+// largest, target colours per NeRF, N R 3 floats) and never R S floats. The steps of an
+// occupancy update (which probes the grids' cells: every 16 steps, not the hot path) and the
+// step after it (whose pack copies the new grids to the device) are left out.
+BOOST_AUTO_TEST_CASE(step_hot_path_reads_no_per_sample_buffer) {
+  const Scene scene = tiny_scene();
+  TempDir dir("transfers");
+  TrainConfig c = tiny_config(Encoding::HashGrid);
+  c.pretrain_steps = 20;
+  c.steps = 40;
+  c.occupancy = true;
+  c.occupancy_res = 32;
+  c.occupancy_warmup = 4;
+  c.occupancy_every = 16;
+  c.log_every = 1;
+  Trainer t(runtime(), scene, c, (dir / "run").string());
+  const size_t R = static_cast<size_t>(c.rays), S = static_cast<size_t>(c.samples);
+  const size_t N = 1 + static_cast<size_t>(scene.num_objects);
+  size_t checked = 0, packed_steps = 0;
+  runtime().reset_transfers();
+  t.run([&](const TrainProgress& p) {
+    const TransferStats x = runtime().transfers();
+    runtime().reset_transfers();
+    // Steps are counted from 1 here; phase step k + 1 updates the grids after step k.
+    const long phase_step = p.step <= c.pretrain_steps ? p.step : p.step - c.pretrain_steps;
+    const long since = phase_step - c.occupancy_warmup;
+    const bool near_update = since >= 0 && (since % c.occupancy_every <= 1);
+    const bool first_of_phase = p.step == 1 || p.step == c.pretrain_steps + 1;
+    if (near_update || first_of_phase) return;
+    ++checked;
+    packed_steps += p.kept < 1.0;
+    BOOST_TEST(x.largest_read <= 4 * sizeof(float), "step " << p.step << " read " << x.largest_read << " bytes");
+    BOOST_TEST(x.largest_write <= N * R * 3 * sizeof(float), "step " << p.step << " wrote " << x.largest_write << " bytes");
+    BOOST_TEST(x.largest_write < R * S * sizeof(float));
+  });
+  BOOST_TEST(checked >= 40u);
+  BOOST_TEST(packed_steps > 0u);  // the grids skipped samples in some checked steps
+}
+
 // A short run with occupancy grids (alpha 0.1 over one cell, so that it skips two thirds of
 // its samples), trained once for the skipping and the termination cases.
 struct GridRun {

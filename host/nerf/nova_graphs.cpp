@@ -6,10 +6,14 @@
 #include "nova/error.hpp"
 #include "nova/nova_fields.hpp"
 #include "nova/ops.hpp"
+#include "nova/random.hpp"
 #include "nova/rays.hpp"
 
 namespace nova {
 namespace {
+
+// Streams of the step graphs' device draws (random.hpp).
+constexpr uint32_t kJitterStream = 1, kNoiseStream = 2;
 
 Shape per_group(size_t b, size_t m, size_t c) { return b == 1 ? Shape{m, c} : Shape{b, m, c}; }
 
@@ -189,6 +193,16 @@ FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g) {
   return out;
 }
 
+// The step's stratified jitter [R, S] and density noise [N, R * S] (N = s.nerfs), drawn on
+// the device from the run's seed and the step (StepGraph::draws).
+void draw_randomness(StepGraph& s, const TrainConfig& c, size_t R, size_t S) {
+  s.draws = std::make_shared<DrawCounter>();
+  s.jitter = random_uniform(s.graph, "jitter", Shape{R, S}, {c.seed, kJitterStream, s.draws});
+  if (c.noise_std > 0)
+    s.noise = random_normal(s.graph, "noise", Shape{static_cast<size_t>(s.nerfs), R * S},
+                            {c.seed, kNoiseStream, s.draws}, c.noise_std);
+}
+
 std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& geo) {
   auto s = std::make_unique<StepGraph>();
   Graph& g = s->graph;
@@ -196,8 +210,7 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   s->nerfs = 1;
   s->pixels = g.input("pixels", Shape{R, 2});
   s->cameras = g.input("cameras", Shape{1, kCameraFloats});
-  s->jitter = g.input("jitter", Shape{R, S});
-  if (c.noise_std > 0) s->noise = g.input("noise", Shape{1, R * S});
+  draw_randomness(*s, c, R, S);
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1}));
@@ -223,9 +236,8 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->nerfs = static_cast<int>(N);
   s->pixels = g.input("pixels", Shape{R, 2});
   s->cameras = g.input("cameras", Shape{N, kCameraFloats});
-  s->jitter = g.input("jitter", Shape{R, S});
-  if (c.noise_std > 0) s->noise = g.input("noise", Shape{N, R * S});
-  s->times = g.input("times", per_group(static_cast<size_t>(K), R * S, 1));
+  draw_randomness(*s, c, R, S);
+  s->times = g.input("times", Shape{static_cast<size_t>(K), 1});
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   s->target_masks = g.input("target_masks", Shape{N, R});
   if (c.conventions.nerf_rgb_area && c.weights.nerf_rgb > 0.0f)
@@ -237,7 +249,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->pack_objects = new_select(c.occupancy, object_grids(K));
   Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
   if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
-  Tensor raw_objects = object_raw(smp.positions[1], s->times, field, s->pack_objects);
+  Tensor raw_objects = object_raw(smp.positions[1], repeat_rows(s->times, R * S), field, s->pack_objects);
   Tensor raw = stack({raw_static, raw_objects});
   const RenderOptions ro = joint_render_options(c.conventions, c.weights);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);
@@ -288,14 +300,14 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
   if (instances > 0) {
     const size_t B = static_cast<size_t>(instances);
     v->transforms = g.input("transforms", Shape{B, 12});
-    v->times = g.input("times", per_group(B, R * S, 1));
+    v->times = g.input("times", Shape{B, 1});
     InstanceOptions io;
     io.ndc = geo.ndc;
     io.ax = geo.ax;
     io.ay = geo.ay;
     Tensor pos = instance_points(smp.positions[0], v->transforms, io);
     v->pack_objects = new_select(packed, std::vector<int>(B, 1));
-    parts.push_back(object_raw(pos, v->times, f, v->pack_objects));
+    parts.push_back(object_raw(pos, repeat_rows(v->times, R * S), f, v->pack_objects));
   }
   Tensor raw = parts.size() == 1 ? parts[0] : stack(parts);
   RenderOptions ro;

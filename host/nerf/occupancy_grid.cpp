@@ -1,10 +1,17 @@
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "nova/error.hpp"
 #include "nova/occupancy.hpp"
 
 namespace nova {
+namespace {
+uint64_t next_generation() {
+  static std::atomic<uint64_t> counter{0};
+  return ++counter;
+}
+}  // namespace
 
 OccupancyGrid::OccupancyGrid(int res, float b, float a) : resolution(res), bound(b), alpha(a) {
   if (res < 1 || res > 512) throw Error("occupancy grid: resolution must be in [1, 512], got " + std::to_string(res), kExitUsage);
@@ -13,6 +20,7 @@ OccupancyGrid::OccupancyGrid(int res, float b, float a) : resolution(res), bound
   const size_t n = static_cast<size_t>(res) * res * res;
   density.assign(n, -1.0f);
   occupied.assign(n, 1);
+  generation = next_generation();
 }
 
 float OccupancyGrid::threshold() const { return -std::log1p(-alpha) / cell_size(); }
@@ -47,6 +55,7 @@ void OccupancyGrid::update(const std::vector<size_t>& cells, const std::vector<f
 void OccupancyGrid::refresh() {
   const float t = threshold();
   for (size_t i = 0; i < density.size(); ++i) occupied[i] = density[i] < 0.0f || density[i] > t;
+  generation = next_generation();
 }
 
 double OccupancyGrid::occupied_fraction() const {

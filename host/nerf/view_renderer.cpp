@@ -296,7 +296,7 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
     std::vector<float> xf, times;
     for (const PlacedInstance& i : instances) {
       for (double x : i.world_to_object) xf.push_back(static_cast<float>(x));
-      times.insert(times.end(), R * S, static_cast<float>(i.time));
+      times.push_back(static_cast<float>(i.time));
     }
     c.exec->set(vg.transforms, xf);
     c.exec->set(vg.times, times);

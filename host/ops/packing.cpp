@@ -1,4 +1,5 @@
-// Packed samples (occupancy.hpp): the pack test on the host, gather and scatter on the device.
+// Packed samples (occupancy.hpp): the pack test, its compaction, gather and scatter, all on the
+// device.
 #include <algorithm>
 
 #include "nova/error.hpp"
@@ -12,46 +13,58 @@ namespace {
 // Indices are stored as floats: exact up to 2^24 rows.
 constexpr size_t kMaxPackRows = size_t{1} << 24;
 
+// Rows per compaction block (kernels/packing.cl's PACK_BLOCK, passed as a build option).
+constexpr size_t kPackBlock = 128;
+
 class PackOp final : public Op {
  public:
   PackOp(std::shared_ptr<PackSelect> s, int extent, size_t batches, size_t rows, size_t multiple)
-      : select_(std::move(s)), extent_(extent), batches_(batches), rows_(rows), multiple_(multiple) {}
+      : select_(std::move(s)), extent_(extent), batches_(batches), rows_(rows), multiple_(multiple),
+        blocks_((rows + kPackBlock - 1) / kPackBlock) {}
   std::string type() const override { return "pack_occupied"; }
 
   void forward(ExecContext& ctx) override {
     PackSelect& s = *select_;
-    std::vector<std::vector<float>> kept(batches_);
-    size_t longest = 0;
     const bool test = s.enabled && s.grids;
     const Range range = sample_range(s);
-    std::vector<float> pos;
-    if (test) pos = ctx.rt.download_floats(ctx.in(0), ctx.in_shape(0).numel());
-    const size_t pos_batches = ctx.in_shape(0).rank() == 3 ? batches_ : 1;
-    for (size_t b = 0; b < batches_; ++b) {
-      const OccupancyGrid* g = nullptr;
-      if (test) {
-        if (b >= s.grid_of_batch.size() || s.grid_of_batch[b] < 0 ||
-            static_cast<size_t>(s.grid_of_batch[b]) >= s.grids->size())
-          throw Error("pack_occupied: no occupancy grid for batch " + std::to_string(b), kExitInternal);
-        g = &(*s.grids)[static_cast<size_t>(s.grid_of_batch[b])];
-      }
-      const float* p = test ? pos.data() + (pos_batches > 1 ? b * rows_ * 3 : 0) : nullptr;
-      auto& k = kept[b];
-      // Rays in order, and in each the samples of the range: the kept rows stay ascending.
-      for (size_t r = 0; r < range.rays; ++r) {
-        if (!range.open.empty() && !range.open[r]) continue;
-        for (size_t m = r * range.per_ray + range.first; m < r * range.per_ray + range.end; ++m)
-          if (!g || g->occupied[g->cell_of(p + m * 3)]) k.push_back(static_cast<float>(m));
-      }
-      longest = std::max(longest, k.size());
-    }
+    const unsigned B = detail::u32(batches_, "pack batches"), M = detail::u32(rows_, "pack rows");
     s.tested = batches_ * rows_;
+    if (!test && range.keeps_all) {
+      ctx.launch("packing", "pack_identity").arg(ctx.out(0)).arg(B).arg(M).run(batches_ * rows_);
+      s.kept = batches_ * rows_;
+      ctx.set_extent(extent_, rows_);
+      return;
+    }
+    Runtime& rt = ctx.rt;
+    ensure_scratch(rt);
+    if (test) upload_grids(rt, s);
+    const bool use_open = !range.open.empty();
+    if (use_open) rt.upload(open_.get(), range.open.data(), range.open.size());
+    const std::string opts = "-DPACK_BLOCK=" + std::to_string(kPackBlock);
+    const unsigned nb = detail::u32(blocks_, "pack blocks");
+    ctx.launch("packing", "pack_flags", opts)
+        .arg(ctx.in(0)).arg(occupied_).arg(cell_offset_).arg(res_).arg(bound_).arg(scale_).arg(open_)
+        .arg(flags_).arg(B).arg(M).arg(static_cast<unsigned>(ctx.in_shape(0).rank() == 3))
+        .arg(detail::u32(range.per_ray, "samples per ray")).arg(detail::u32(range.first, "first sample"))
+        .arg(detail::u32(range.end, "end sample")).arg(static_cast<int>(test)).arg(static_cast<int>(use_open))
+        .run(batches_ * rows_);
+    ctx.launch("packing", "pack_block_counts", opts).arg(flags_).arg(offsets_).arg(B).arg(M).arg(nb)
+        .run(batches_ * blocks_);
+    ctx.launch("packing", "pack_scan", opts).arg(offsets_).arg(totals_).arg(B).arg(nb).run(batches_);
+    // The one read of a run: B counts, which size every later launch of the pass.
+    std::vector<uint32_t> total(batches_);
+    rt.download(totals_.get(), total.data(), total.size() * sizeof(uint32_t));
+    size_t longest = 0;
     s.kept = 0;
-    for (const auto& k : kept) s.kept += k.size();
+    for (uint32_t n : total) {
+      longest = std::max<size_t>(longest, n);
+      s.kept += n;
+    }
     const size_t live = std::min(rows_, std::max(multiple_, (longest + multiple_ - 1) / multiple_ * multiple_));
-    std::vector<float> index(batches_ * live, -1.0f);
-    for (size_t b = 0; b < batches_; ++b) std::copy(kept[b].begin(), kept[b].end(), index.begin() + b * live);
-    ctx.rt.upload(ctx.out(0), index.data(), index.size() * sizeof(float));
+    const unsigned L = detail::u32(live, "packed rows");
+    ctx.launch("packing", "pack_write", opts).arg(flags_).arg(offsets_).arg(ctx.out(0)).arg(B).arg(M).arg(nb).arg(L)
+        .run(batches_ * blocks_);
+    ctx.launch("packing", "pack_pad", opts).arg(ctx.out(0)).arg(totals_).arg(B).arg(L).run(batches_ * live);
     ctx.set_extent(extent_, live);
   }
   void backward(ExecContext&) override {}
@@ -61,12 +74,13 @@ class PackOp final : public Op {
   // The rows as rays of `per_ray` samples, of which [first, end) of the open rays are kept;
   // without a sample range, one "ray" holding every row.
   struct Range {
-    size_t rays = 1, per_ray = 0, first = 0, end = 0;
+    size_t per_ray = 0, first = 0, end = 0;
     const std::vector<uint8_t>& open;
+    bool keeps_all = false;
   };
   Range sample_range(const PackSelect& s) const {
     static const std::vector<uint8_t> all;
-    if (s.samples_per_ray == 0) return {1, rows_, 0, rows_, all};
+    if (s.samples_per_ray == 0) return {rows_, 0, rows_, all, true};
     const size_t S = s.samples_per_ray;
     if (rows_ % S != 0 || s.first_sample > s.end_sample || s.end_sample > S)
       throw Error("pack_occupied: samples [" + std::to_string(s.first_sample) + ", " + std::to_string(s.end_sample) +
@@ -74,12 +88,60 @@ class PackOp final : public Op {
     if (!s.open_rays.empty() && s.open_rays.size() != rows_ / S)
       throw Error("pack_occupied: " + std::to_string(s.open_rays.size()) + " open-ray flags for " +
                   std::to_string(rows_ / S) + " rays", kExitInternal);
-    return {rows_ / S, S, s.first_sample, s.end_sample, s.open_rays};
+    return {S, s.first_sample, s.end_sample, s.open_rays, s.first_sample == 0 && s.end_sample == S && s.open_rays.empty()};
+  }
+
+  // Per-run scratch, owned by the op (B x M flag bytes and a few counts per block).
+  void ensure_scratch(Runtime& rt) {
+    if (flags_) return;
+    flags_ = rt.alloc(std::max<size_t>(batches_ * rows_, 4));
+    offsets_ = rt.alloc(batches_ * blocks_ * sizeof(uint32_t));
+    totals_ = rt.alloc(batches_ * sizeof(uint32_t));
+    open_ = rt.alloc(std::max<size_t>(rows_, 4));
+    // Unused until a grid is uploaded, but every kernel argument needs a buffer.
+    for (Buffer* b : {&occupied_, &cell_offset_, &res_, &bound_, &scale_}) *b = rt.alloc(std::max<size_t>(batches_, 1) * 4);
+  }
+
+  // Copies the grids' cells and each batch's grid geometry to the device when a grid has a
+  // new generation or the batches map to other grids; otherwise nothing crosses the bus.
+  void upload_grids(Runtime& rt, const PackSelect& s) {
+    std::vector<uint64_t> key(s.grid_of_batch.begin(), s.grid_of_batch.end());
+    for (const OccupancyGrid& g : *s.grids) key.push_back(g.generation);
+    key.push_back(s.grids->size());
+    if (key == uploaded_) return;
+    std::vector<uint32_t> start;
+    std::vector<uint8_t> cells;
+    for (const OccupancyGrid& g : *s.grids) {
+      start.push_back(detail::u32(cells.size(), "occupancy cells"));
+      cells.insert(cells.end(), g.occupied.begin(), g.occupied.end());
+    }
+    std::vector<uint32_t> offset, res;
+    std::vector<float> bound, scale;
+    for (size_t b = 0; b < batches_; ++b) {
+      if (b >= s.grid_of_batch.size() || s.grid_of_batch[b] < 0 ||
+          static_cast<size_t>(s.grid_of_batch[b]) >= s.grids->size())
+        throw Error("pack_occupied: no occupancy grid for batch " + std::to_string(b), kExitInternal);
+      const size_t k = static_cast<size_t>(s.grid_of_batch[b]);
+      const OccupancyGrid& g = (*s.grids)[k];
+      offset.push_back(start[k]);
+      res.push_back(static_cast<uint32_t>(g.resolution));
+      bound.push_back(g.bound);
+      scale.push_back(static_cast<float>(g.resolution) / (2.0f * g.bound));
+    }
+    if (occupied_.bytes() < cells.size()) occupied_ = rt.alloc(cells.size());
+    rt.upload(occupied_.get(), cells.data(), cells.size());
+    rt.upload(cell_offset_.get(), offset.data(), offset.size() * 4);
+    rt.upload(res_.get(), res.data(), res.size() * 4);
+    rt.upload(bound_.get(), bound.data(), bound.size() * 4);
+    rt.upload(scale_.get(), scale.data(), scale.size() * 4);
+    uploaded_ = std::move(key);
   }
 
   std::shared_ptr<PackSelect> select_;
   int extent_;
-  size_t batches_, rows_, multiple_;
+  size_t batches_, rows_, multiple_, blocks_;
+  Buffer flags_, offsets_, totals_, open_, occupied_, cell_offset_, res_, bound_, scale_;
+  std::vector<uint64_t> uploaded_;
 };
 
 class GatherRowsOp final : public Op {

@@ -149,12 +149,18 @@ Buffer Runtime::sub_buffer(const Buffer& parent, size_t offset, size_t bytes) {
 
 void Runtime::upload(cl_mem dst, const void* src, size_t bytes, size_t offset) {
   if (bytes == 0) return;
+  ++transfers_.writes;
+  transfers_.write_bytes += bytes;
+  transfers_.largest_write = std::max(transfers_.largest_write, bytes);
   cl_check(clEnqueueWriteBuffer(queue_, dst, CL_TRUE, offset, bytes, src, 0, nullptr, nullptr),
            "clEnqueueWriteBuffer");
 }
 
 void Runtime::download(cl_mem src, void* dst, size_t bytes, size_t offset) {
   if (bytes == 0) return;
+  ++transfers_.reads;
+  transfers_.read_bytes += bytes;
+  transfers_.largest_read = std::max(transfers_.largest_read, bytes);
   cl_check(clEnqueueReadBuffer(queue_, src, CL_TRUE, offset, bytes, dst, 0, nullptr, nullptr),
            "clEnqueueReadBuffer");
 }

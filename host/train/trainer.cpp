@@ -113,7 +113,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   const bool joint = graph_joint_;
   const long phase_step = joint ? step_ - c.pretrain_steps : step_;
   const size_t F = scene_.frames.size();
-  const size_t R = static_cast<size_t>(c.rays), S = static_cast<size_t>(c.samples);
+  const size_t R = static_cast<size_t>(c.rays);
   const int N = graph_->nerfs;
 
   size_t fi = static_cast<size_t>(uniform01(rng_) * static_cast<float>(F)) % F;
@@ -159,17 +159,10 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     batch = draw_pixels(frame.rgb, frame.masks, background_only, c.rays, rng_);
   }
 
-  std::vector<float> jitter(R * S);
-  for (float& v : jitter) v = uniform01(rng_);
+  graph_->draws->value = static_cast<uint64_t>(step_);
   exec_->set(graph_->pixels, batch.pixels);
   exec_->set(graph_->cameras, camera_rows(cameras));
-  exec_->set(graph_->jitter, jitter);
   exec_->set(graph_->target_rgb, batch.rgb);
-  if (graph_->noise.valid()) {
-    std::vector<float> noise(static_cast<size_t>(N) * R * S);
-    for (float& v : noise) v = c.noise_std * standard_normal(rng_);
-    exec_->set(graph_->noise, noise);
-  }
   if (graph_->target_depth.valid()) {
     // Minus the disparity: the NDC depth the renderer gives grows as disparity falls. A
     // warped (augmented) view has no disparity map, so its rays carry no depth term.
@@ -196,8 +189,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   }
   if (joint) {
     exec_->set(graph_->target_masks, batch.masks);
-    exec_->set(graph_->times, std::vector<float>(static_cast<size_t>(scene_.num_objects) * R * S,
-                                                 static_cast<float>(frame.time)));
+    exec_->set(graph_->times, std::vector<float>(static_cast<size_t>(scene_.num_objects), static_cast<float>(frame.time)));
   }
   exec_->forward();
   exec_->backward();

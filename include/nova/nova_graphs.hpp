@@ -10,6 +10,7 @@
 #include "nova/graph.hpp"
 #include "nova/losses.hpp"
 #include "nova/occupancy.hpp"
+#include "nova/random.hpp"
 #include "nova/render.hpp"
 #include "nova/scene.hpp"
 #include "nova/train_config.hpp"
@@ -40,8 +41,13 @@ FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g);
 struct StepGraph {
   Graph graph;
   int nerfs = 1;  // 1 (pretraining) or 1 + K
-  // Data inputs, set every step (invalid when the graph has none).
-  Tensor pixels, cameras, jitter, noise, times, target_rgb, target_masks;
+  // Data inputs, set every step (invalid when the graph has none); times is [K, 1], each
+  // object's time.
+  Tensor pixels, cameras, times, target_rgb, target_masks;
+  // Drawn on the device every run (random.hpp): stratified jitter [R, S] and, with
+  // noise_std > 0, density noise [N, R * S]. `draws` is their counter: set it to the step.
+  Tensor jitter, noise;
+  std::shared_ptr<DrawCounter> draws;
   // The targets of the depth and free-space terms (when either is built): minus the disparity
   // per ray, and 1 where it applies (0 on augmented steps, whose warped views have no disparity).
   Tensor target_depth, depth_valid;
@@ -70,7 +76,8 @@ struct ViewGraph {
   Graph graph;
   int rays = 0, instances = 0;
   bool background = true;
-  Tensor pixels, cameras, transforms, times;  // cameras: [N, 16], the view's camera N times
+  // cameras: [N, 16], the view's camera N times; times [instances, 1]
+  Tensor pixels, cameras, transforms, times;
   RenderOutputs out;
   // With `packed`: the packing of the static samples and of the instances' samples (set
   // grid_of_batch to each instance's object grid), against occupancy grids and the sample

@@ -30,6 +30,10 @@ struct OccupancyGrid {
   float alpha = 0.01f;          // opacity over one cell that counts as occupied
   std::vector<float> density;   // G^3, x fastest; < 0: never evaluated (occupied)
   std::vector<uint8_t> occupied;
+  // Changes (to a value no grid had before) whenever `occupied` is recomputed: the pack op
+  // copies the cells to the device again only when a grid's generation moves. Change
+  // `density` or `occupied` only through update() + refresh().
+  uint64_t generation = 0;
 
   OccupancyGrid() = default;
   OccupancyGrid(int resolution, float bound, float alpha);
@@ -42,7 +46,7 @@ struct OccupancyGrid {
   void point_in(size_t c, const float* u, float* p) const;
   // Folds new densities at cells into the grid: d = max(decay * d, new).
   void update(const std::vector<size_t>& cells, const std::vector<float>& densities, float decay);
-  // Recomputes `occupied` from `density`.
+  // Recomputes `occupied` from `density`, and takes a new generation.
   void refresh();
   double occupied_fraction() const;
 };
@@ -72,10 +76,11 @@ struct Packed {
   size_t batches = 1, dense_rows = 0;
 };
 
-// Tests positions [M, 3] or [B, M, 3] (field coordinates, read back to the host) against
-// their grids and packs the survivors of each batch; the live row count is the largest
-// batch's, rounded up to a multiple of `multiple` (GEMM-friendly), at least `multiple`.
-// Forward only: positions are data.
+// Tests positions [M, 3] or [B, M, 3] (field coordinates) against their grids and packs the
+// survivors of each batch, all on the device (a flag per row, block counts, a prefix sum in a
+// fixed order, an ordered write); the live row count is the largest batch's, rounded up to a
+// multiple of `multiple` (GEMM-friendly), at least `multiple`. The host reads B counts per
+// run, never a per-sample buffer. Forward only: positions are data.
 Packed pack_occupied(Tensor positions, std::shared_ptr<PackSelect> select, size_t multiple = 32);
 // x [M, D] (shared by every batch) or [B, M, D] -> [C, D] or [B, C, D], live rows filled.
 Tensor gather_rows(Tensor x, const Packed& p);

@@ -41,6 +41,10 @@ Tensor mse(Tensor pred, Tensor target);
 // identity. Joint training gates the static NeRF's samples with each ray's background mask.
 Tensor gradient_gate(Tensor x, Tensor gate, size_t gate_row = 0);
 
+// x [B, C] (data) -> [B, rows, C] ([rows, C] for B = 1): batch b's row in each of its rows.
+// Spreads a per-group constant (an object's time) over its samples without a host upload.
+Tensor repeat_rows(Tensor x, size_t rows);
+
 // sum_i weights[i] * terms[i] over scalars.
 Tensor weighted_sum(const std::vector<Tensor>& terms, const std::vector<float>& weights);
 

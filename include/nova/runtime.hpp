@@ -72,6 +72,14 @@ class Buffer {
 
 class Runtime;
 
+// Host <-> device copies made through a Runtime since the last reset: a blocking read stalls
+// the host until the queue drains, so the training step's hot path must keep its reads small
+// (counts, scalars), never a per-sample buffer.
+struct TransferStats {
+  size_t reads = 0, read_bytes = 0, largest_read = 0;
+  size_t writes = 0, write_bytes = 0, largest_write = 0;
+};
+
 // One kind of kernel launch, recorded when Runtime::record_launches is on: the kernel, the
 // problem size of each dimension (before rounding up) and the work-group size chosen for it.
 // Lets a test prove that every kernel ran at sizes that are no multiple of its work-group.
@@ -147,6 +155,8 @@ class Runtime {
   Buffer alloc(size_t bytes);
   // A view of [offset, offset + bytes) of `parent`; offset must honour base_addr_align_bytes.
   Buffer sub_buffer(const Buffer& parent, size_t offset, size_t bytes);
+  const TransferStats& transfers() const { return transfers_; }
+  void reset_transfers() { transfers_ = {}; }
   void upload(cl_mem dst, const void* src, size_t bytes, size_t offset = 0);
   void download(cl_mem src, void* dst, size_t bytes, size_t offset = 0);
   void fill_zero(cl_mem dst, size_t bytes, size_t offset = 0);
@@ -168,6 +178,7 @@ class Runtime {
   std::map<cl_kernel, size_t> work_group_sizes_;
   std::map<cl_kernel, std::pair<std::string, std::string>> kernel_names_;  // family, name
   bool record_launches_ = false;
+  TransferStats transfers_;
   std::set<LaunchRecord> launches_;
 };
 

@@ -1,0 +1,66 @@
+// The device random ops (random.hpp): forward only, their values are data.
+#include "nova/random.hpp"
+
+#include "nova/error.hpp"
+#include "nova/executor.hpp"
+#include "op_util.hpp"
+
+namespace nova {
+namespace {
+
+class RandomOp final : public Op {
+ public:
+  RandomOp(const char* kernel, size_t n, RandomStream rs, float scale)
+      : kernel_(kernel), n_(n), rs_(std::move(rs)), scale_(scale) {}
+  std::string type() const override { return kernel_; }
+
+  void forward(ExecContext& ctx) override {
+    const uint64_t c = rs_.counter ? rs_.counter->value : 0;
+    ctx.launch("random", kernel_)
+        .arg(ctx.out(0)).arg(detail::u32(n_, "random values")).arg(rs_.seed).arg(rs_.stream)
+        .arg(static_cast<unsigned>(c & 0xffffffffu)).arg(static_cast<unsigned>(c >> 32)).arg(scale_)
+        .run((n_ + 3) / 4);
+  }
+  void backward(ExecContext&) override {}
+  std::vector<TensorId> saved_for_backward() const override { return {}; }
+
+ private:
+  const char* kernel_;
+  size_t n_;
+  RandomStream rs_;
+  float scale_;
+};
+
+Tensor random_op(const char* kernel, Graph& g, const std::string& name, Shape shape, RandomStream rs, float scale) {
+  if (shape.numel() == 0) throw Error(std::string(kernel) + ": '" + name + "' has no elements", kExitInternal);
+  Tensor y = g.activation(name, shape);
+  g.add(std::make_unique<RandomOp>(kernel, shape.numel(), std::move(rs), scale), {}, {y});
+  return y;
+}
+
+constexpr uint32_t kM0 = 0xD2511F53u, kM1 = 0xCD9E8D57u, kW0 = 0x9E3779B9u, kW1 = 0xBB67AE85u;
+
+}  // namespace
+
+Tensor random_uniform(Graph& g, const std::string& name, Shape shape, RandomStream rs, float scale) {
+  return random_op("random_uniform", g, name, std::move(shape), std::move(rs), scale);
+}
+
+Tensor random_normal(Graph& g, const std::string& name, Shape shape, RandomStream rs, float scale) {
+  return random_op("random_normal", g, name, std::move(shape), std::move(rs), scale);
+}
+
+std::array<uint32_t, 4> philox4x32_10(std::array<uint32_t, 4> c, std::array<uint32_t, 2> k) {
+  for (int round = 0; round < 10; ++round) {
+    if (round > 0) {
+      k[0] += kW0;
+      k[1] += kW1;
+    }
+    const uint64_t p0 = uint64_t{kM0} * c[0], p1 = uint64_t{kM1} * c[2];
+    c = {static_cast<uint32_t>(p1 >> 32) ^ c[1] ^ k[0], static_cast<uint32_t>(p1),
+         static_cast<uint32_t>(p0 >> 32) ^ c[3] ^ k[1], static_cast<uint32_t>(p0)};
+  }
+  return c;
+}
+
+}  // namespace nova
