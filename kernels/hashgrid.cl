@@ -10,9 +10,10 @@
 // neighbouring frames (a monocular video sees each time from one camera only). D (HG_DIMS, <= 4: xyz or xyzt) and F (HG_FEATURES, <= 8) are build options,
 // so the corner and feature loops unroll (3x faster on PoCL than runtime bounds).
 //
-// The backward writes the table gradient without atomics, one work-item per (network, level)
-// walking the rows in order, so runs are bit-reproducible (exact resume); levels and
-// networks give its parallelism.
+// Two backwards, both bit-reproducible (exact resume): the ordered one writes the table
+// gradient without atomics, one work-item per (network, level) walking the rows in order
+// (levels and networks give its parallelism: enough for a CPU); the atomic one (at the end of
+// this file) is parallel over rows and sums in fixed point (for GPUs).
 
 #ifndef HG_DIMS
 #define HG_DIMS 3
@@ -128,3 +129,82 @@ __kernel void hashgrid_backward(__global const float* positions, __global const 
     }
   }
 }
+
+// ---- The parallel backward: fixed-point sums, exact in any order ---------------------------
+// One work-item per (network, level, row) adds its 2^D F contributions to a table of 64-bit
+// integers with atomics. Integer addition is associative, so the sum, and the run, is the
+// same whatever order the atomics land in: as deterministic as the ordered backward above,
+// with parallelism over rows (what a GPU needs). Contributions are scaled by 2^k, with k
+// chosen from max |dout| so that no entry's sum can reach 2^60 (an entry receives at most
+// weight 1 per row, so |sum| <= rows max |dout|); each is rounded to the nearest integer, an
+// absolute error of at most 2^-(k+1) < 2^-60 rows max |dout| per contribution, far below
+// float32's rounding of the ordered sum. The final float is the exact integer sum rounded once.
+#ifdef cl_khr_int64_base_atomics
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+
+// partial[i] = max |dout[e]| over e = i, i + parts, ... (max is exact in any order).
+__kernel void hashgrid_absmax_partial(__global const float* dout, __global float* partial, uint n,
+                                      uint parts) {
+  const uint i = get_global_id(0);
+  if (i >= parts) return;
+  float m = 0.0f;
+  for (uint e = i; e < n; e += parts) m = fmax(m, fabs(dout[e]));
+  partial[i] = m;
+}
+
+// partial[0] = max of partial[0 .. parts): a single work-item.
+__kernel void hashgrid_absmax_finish(__global float* partial, uint parts) {
+  if (get_global_id(0) != 0) return;
+  float m = partial[0];
+  for (uint p = 1; p < parts; ++p) m = fmax(m, partial[p]);
+  partial[0] = m;
+}
+
+// The scale exponent k: rows max|dout| 2^k < 2^60 (frexp: rows max|dout| < 2^e; the float
+// product may round down by 2^-24 relative, which the headroom to 2^63 absorbs).
+inline int hg_fixed_exponent(float absmax, uint rows) {
+  if (!(absmax > 0.0f) || isinf(absmax)) return 0;
+  int e;
+  frexp((float)rows * absmax, &e);
+  return 60 - e;
+}
+
+__kernel void hashgrid_backward_atomic(__global const float* positions, __global const float* dout,
+                                       __constant float* res, __constant float* res_t,
+                                       __global long* acc, __global const float* absmax,
+                                       uint nets, uint rows, uint levels, uint table_size,
+                                       float inv_bound, float inv_bound_t) {
+  const uint i = get_global_id(0);
+  if (i >= nets * levels * rows) return;
+  const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
+  const int k = hg_fixed_exponent(absmax[0], rows);
+  const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
+  const int dense = hg_dense(resolution, resolution_t, table_size);
+  uint cell[HG_DIMS];
+  float frac[HG_DIMS];
+  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
+           res_t[l], cell, frac);
+  __global const float* dy = dout + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
+  __global long* g = acc + ((size_t)b * levels + l) * table_size * HG_FEATURES;
+  for (uint c = 0; c < HG_CORNERS; ++c) {
+    float w;
+    const uint v = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &w);
+    for (uint f = 0; f < HG_FEATURES; ++f) {
+      const long q = convert_long_rte(ldexp(w * dy[f], k));
+      if (q != 0) atom_add(&g[(size_t)v * HG_FEATURES + f], q);
+    }
+  }
+}
+
+// dtable[e] (+)= acc[e] 2^-k, for every entry of every network and level.
+__kernel void hashgrid_backward_fixed_to_float(__global const long* acc, __global const float* absmax,
+                                               __global float* dtable, uint n, uint rows,
+                                               int accumulate) {
+  const uint e = get_global_id(0);
+  if (e >= n) return;
+  const float v = ldexp(convert_float(acc[e]), -hg_fixed_exponent(absmax[0], rows));
+  dtable[e] = accumulate ? dtable[e] + v : v;
+}
+#else
+// Without 64-bit atomics the host runs the ordered backward (hash_backward_choice).
+#endif

@@ -14,10 +14,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <string>
 #include <utility>
 
 #include "harness.hpp"
 #include "nova/error.hpp"
+#include "nova/executor.hpp"
 #include "nova/hash_grid.hpp"
 #include "nova/ops.hpp"
 
@@ -99,6 +102,36 @@ std::vector<float> run_encoding(const std::vector<float>& pos, const std::vector
       {pos, table});
 }
 
+// Runs `body` under each table-gradient summation the device offers (NOVA_HASH_BACKWARD).
+template <class Body>
+void for_each_backward(Body body) {
+  std::vector<std::string> modes{"ordered"};
+  if (test::runtime().info().int64_atomics) modes.push_back("atomic");
+  for (const std::string& m : modes) {
+    setenv("NOVA_HASH_BACKWARD", m.c_str(), 1);
+    BOOST_TEST_CONTEXT("backward " << m) { body(m); }
+  }
+  unsetenv("NOVA_HASH_BACKWARD");
+}
+
+// d mse(encoding, target) / d table on the device.
+std::vector<float> table_gradient_of(const std::vector<float>& pos, const std::vector<float>& table,
+                                     const std::vector<float>& target, size_t rows, size_t dims,
+                                     const HashGridConfig& c) {
+  Graph g;
+  Tensor p = g.input("p", Shape{rows, dims});
+  Tensor t = g.input("table", hash_grid_table_shape(c), true);
+  Tensor y = g.input("target", Shape{rows, static_cast<size_t>(c.outputs())});
+  g.set_loss(mse(hash_encoding(p, t, c), y));
+  Executor ex(test::runtime(), g);
+  ex.set(p, pos);
+  ex.set(t, table);
+  ex.set(y, target);
+  ex.forward();
+  ex.backward();
+  return ex.get_grad(t);
+}
+
 }  // namespace
 
 BOOST_AUTO_TEST_SUITE(hashgrid)
@@ -156,6 +189,7 @@ BOOST_AUTO_TEST_CASE(table_gradient) {
   c.log2_size = 4;
   c.min_resolution = 2;
   c.max_resolution = 7;
+  for_each_backward([&](const std::string&) {
   for (auto [dims, time_cap] : {std::pair<size_t, int>{3, 0}, {4, 0}, {4, 2}}) {
     c.time_max_resolution = time_cap;
     const size_t nets = 2, rows = 23;
@@ -170,6 +204,7 @@ BOOST_AUTO_TEST_CASE(table_gradient) {
           {test_positions(nets * rows, dims, 1.0f, 9), random_floats(nets * tsize, -1, 1, 10)});
     }
   }
+  });
 }
 
 BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
@@ -181,15 +216,99 @@ BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
   c.min_resolution = 3;
   c.max_resolution = 5;
   const size_t rows = 19;
-  check_gradients(
-      [&](Graph& g) {
-        Tensor p = g.input("p", Shape{rows, 3});
-        Tensor q = g.input("q", Shape{rows, 3});
-        Tensor t = g.input("table", hash_grid_table_shape(c), true);
-        return OpUnderTest{{p, q, t}, concat({hash_encoding(p, t, c), hash_encoding(q, t, c)})};
-      },
-      {test_positions(rows, 3, 1.0f, 12), random_floats(rows * 3, -1, 1, 13),
-       random_floats(hash_grid_table_shape(c).numel(), -1, 1, 14)});
+  for_each_backward([&](const std::string&) {
+    check_gradients(
+        [&](Graph& g) {
+          Tensor p = g.input("p", Shape{rows, 3});
+          Tensor q = g.input("q", Shape{rows, 3});
+          Tensor t = g.input("table", hash_grid_table_shape(c), true);
+          return OpUnderTest{{p, q, t}, concat({hash_encoding(p, t, c), hash_encoding(q, t, c)})};
+        },
+        {test_positions(rows, 3, 1.0f, 12), random_floats(rows * 3, -1, 1, 13),
+         random_floats(hash_grid_table_shape(c).numel(), -1, 1, 14)});
+  });
+}
+
+// Both backwards against the float64 sum of every contribution, at 1031 rows (ragged for any
+// work-group) over a 2^8 table, so that hashed entries collect many rows each. Tolerances:
+// the ordered backward sums up to ~rows 2^D terms per entry in float32 (relative error of
+// the sum at most n 2^-24 of the sum of |terms|, n ~ 1e3: 1e-4 of the scale of the gradient,
+// which is what atol states); the atomic one rounds each term to 2^-k <= 2^-59 rows max|dy|
+// and the exact sum to float once (1e-6 relative covers it; the same atol as the ordered).
+// Each backward gives the same bits on a second run (fixed order, or exact integer sums),
+// and scaling table and targets by 2^-20 scales the gradient by exactly 2^-20 (the fixed-point scale
+// follows the gradient's size: nothing underflows).
+BOOST_AUTO_TEST_CASE(table_gradient_matches_float64_sums) {
+  HashGridConfig c;
+  c.levels = 4;
+  c.features = 2;
+  c.log2_size = 8;
+  c.min_resolution = 3;
+  c.max_resolution = 30;
+  const size_t rows = 1031, dims = 3, outs = static_cast<size_t>(c.outputs());
+  const auto pos = test_positions(rows, dims, 1.0f, 31);
+  const auto table = random_floats(hash_grid_table_shape(c).numel(), -1, 1, 32);
+  const auto target = random_floats(rows * outs, -1, 1, 33);
+  // The upstream gradient 2 (y - target) / n from the float64 forward, then every
+  // contribution w dy summed in float64.
+  const auto y = hash_reference(pos, rows, dims, table, c);
+  std::vector<double> ref(table.size(), 0.0);
+  {
+    const std::vector<float> res = hash_grid_resolutions(c);
+    const uint64_t T = uint64_t{1} << c.log2_size;
+    const uint32_t primes[3] = {1u, 2654435761u, 805459861u};
+    for (size_t r = 0; r < rows; ++r)
+      for (int l = 0; l < c.levels; ++l) {
+        const double R = res[l];
+        const bool dense = (R + 1) * (R + 1) * (R + 1) <= static_cast<double>(T);
+        uint32_t cell[3];
+        double frac[3];
+        for (size_t d = 0; d < dims; ++d) {
+          const double u = std::clamp(0.5 * (pos[r * dims + d] + 1.0), 0.0, 1.0) * R;
+          const double f = std::min(std::floor(u), R - 1);
+          cell[d] = static_cast<uint32_t>(f);
+          frac[d] = u - f;
+        }
+        for (uint32_t corner = 0; corner < 8; ++corner) {
+          double w = 1;
+          uint64_t index = 0, stride = 1;
+          uint32_t h = 0;
+          for (size_t d = 0; d < dims; ++d) {
+            const uint32_t bit = (corner >> d) & 1u, v = cell[d] + bit;
+            w *= bit ? frac[d] : 1 - frac[d];
+            index += v * stride;
+            stride *= static_cast<uint64_t>(R) + 1;
+            h ^= v * primes[d];
+          }
+          const uint64_t row = dense ? index : (h & (T - 1));
+          for (int f = 0; f < c.features; ++f) {
+            const size_t o = (r * c.levels + l) * c.features + f;
+            ref[(l * T + row) * c.features + f] += w * 2.0 * (y[o] - target[o]) / double(rows * outs);
+          }
+        }
+      }
+  }
+  double scale = 0;
+  for (double v : ref) scale = std::max(scale, std::fabs(v));
+  std::vector<float> tiny_table(table), tiny_target(target);
+  for (float& v : tiny_table) v = std::ldexp(v, -20);
+  for (float& v : tiny_target) v = std::ldexp(v, -20);
+  for_each_backward([&](const std::string& mode) {
+    const auto g = table_gradient_of(pos, table, target, rows, dims, c);
+    expect_close(g, ref, 1e-4 * scale, 1e-6, "table gradient");
+    BOOST_TEST(g == table_gradient_of(pos, table, target, rows, dims, c), "second run, same bits");
+    // d mse / d table is linear in (encoding - target): scaled by 2^-20 as well.
+    const auto tiny = table_gradient_of(pos, tiny_table, tiny_target, rows, dims, c);
+    size_t differ = 0;
+    for (size_t i = 0; i < g.size(); ++i) differ += tiny[i] != std::ldexp(g[i], -20);
+    BOOST_TEST(differ == 0u, mode << ": " << differ << " entries not scaled by exactly 2^-20");
+  });
+}
+
+BOOST_AUTO_TEST_CASE(unknown_backward_is_refused) {
+  setenv("NOVA_HASH_BACKWARD", "fast", 1);
+  BOOST_CHECK_THROW(hash_backward_choice(test::runtime().info()), Error);
+  unsetenv("NOVA_HASH_BACKWARD");
 }
 
 BOOST_AUTO_TEST_CASE(bad_configurations_are_refused) {

@@ -1,10 +1,12 @@
 // The multiresolution hash encoding op (kernels/hashgrid.cl).
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include "nova/error.hpp"
 #include "nova/executor.hpp"
 #include "nova/hash_grid.hpp"
+#include "nova/runtime.hpp"
 #include "op_util.hpp"
 
 namespace nova {
@@ -38,6 +40,10 @@ class HashEncodingOp final : public Op {
       return;
     }
     upload_resolutions(ctx.rt);
+    if (parallel_backward(ctx.rt)) {
+      backward_atomic(ctx, dy, dtable);
+      return;
+    }
     ctx.launch("hashgrid", "hashgrid_backward", build_options())
         .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(dtable)
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(ctx.in_rows(0, rows_), "rows"))
@@ -49,7 +55,41 @@ class HashEncodingOp final : public Op {
   // The table gradient needs the positions only; the table itself is linear in the output.
   std::vector<TensorId> saved_for_backward() const override { return {inputs()[0]}; }
 
+  // The atomic backward's fixed-point table.
+  size_t workspace_bytes(Runtime& rt, Pass pass) const override {
+    return pass == Pass::Backward && parallel_backward(rt) ? table_entries() * sizeof(int64_t) : 0;
+  }
+
  private:
+  size_t table_entries() const { return nets_ * c_.levels * table_size() * c_.features; }
+  bool parallel_backward(const Runtime& rt) const {
+    const HashBackward b = hash_backward_choice(rt.info());
+    return b == HashBackward::Atomic;
+  }
+
+  // Largest |dy| (the fixed-point scale), zeroed fixed-point table, atomic sums over rows,
+  // conversion to float.
+  void backward_atomic(ExecContext& ctx, cl_mem dy, cl_mem dtable) {
+    const size_t rows = ctx.in_rows(0, rows_);
+    const size_t n = nets_ * rows * c_.levels * c_.features;
+    const size_t parts = detail::reduction_parts(n);
+    if (absmax_.bytes() < parts * sizeof(float)) absmax_ = ctx.rt.alloc(parts * sizeof(float));
+    const std::string opts = build_options();
+    ctx.launch("hashgrid", "hashgrid_absmax_partial", opts)
+        .arg(dy).arg(absmax_).arg(detail::u32(n, "encoding gradients")).arg(detail::u32(parts, "parts")).run(parts);
+    ctx.launch("hashgrid", "hashgrid_absmax_finish", opts).arg(absmax_).arg(detail::u32(parts, "parts")).run(1);
+    ctx.rt.fill_zero(ctx.workspace(), table_entries() * sizeof(int64_t));
+    ctx.launch("hashgrid", "hashgrid_backward_atomic", opts)
+        .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.workspace()).arg(absmax_)
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound).arg(1.0f)
+        .run(nets_ * rows * c_.levels);
+    ctx.launch("hashgrid", "hashgrid_backward_fixed_to_float", opts)
+        .arg(ctx.workspace()).arg(absmax_).arg(dtable).arg(detail::u32(table_entries(), "table entries"))
+        .arg(detail::u32(rows, "rows")).arg(static_cast<int>(ctx.accumulate_in(1)))
+        .run(table_entries());
+  }
+
   unsigned table_size() const { return 1u << c_.log2_size; }
   std::string build_options() const {
     return "-DHG_DIMS=" + std::to_string(dims_) + " -DHG_FEATURES=" + std::to_string(c_.features);
@@ -62,10 +102,26 @@ class HashEncodingOp final : public Op {
   size_t nets_, rows_, dims_;
   HashGridConfig c_;
   std::vector<float> res_, res_t_;
-  Buffer res_buffer_, res_t_buffer_;
+  Buffer res_buffer_, res_t_buffer_, absmax_;
 };
 
 }  // namespace
+
+HashBackward hash_backward_choice(const DeviceInfo& d) {
+  const char* env = std::getenv("NOVA_HASH_BACKWARD");
+  const std::string want = env ? env : "";
+  if (want == "ordered") return HashBackward::Ordered;
+  if (want == "atomic") {
+    if (!d.int64_atomics)
+      throw Error("NOVA_HASH_BACKWARD=atomic: device '" + d.name + "' has no cl_khr_int64_base_atomics", kExitUsage);
+    return HashBackward::Atomic;
+  }
+  if (!want.empty() && want != "auto")
+    throw Error("NOVA_HASH_BACKWARD='" + want + "': expected auto, ordered or atomic", kExitUsage);
+  // A CPU's few cores are busy with the networks and levels of the ordered backward, which
+  // measured faster there (README, "Performance"); a GPU needs parallelism over rows.
+  return d.int64_atomics && !(d.type & CL_DEVICE_TYPE_CPU) ? HashBackward::Atomic : HashBackward::Ordered;
+}
 
 void validate(const HashGridConfig& c) {
   auto fail = [](const std::string& what) { throw Error("hash grid: " + what, kExitUsage); };

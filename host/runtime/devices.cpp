@@ -113,6 +113,8 @@ std::vector<DeviceInfo> list_devices() {
       info.native_kernels =
           (device_value<cl_device_exec_capabilities>(devices[d], CL_DEVICE_EXECUTION_CAPABILITIES) &
            CL_EXEC_NATIVE_KERNEL) != 0;
+      info.int64_atomics = device_string(devices[d], CL_DEVICE_EXTENSIONS).find("cl_khr_int64_base_atomics") !=
+                           std::string::npos;
       out.push_back(std::move(info));
     }
   }

@@ -12,6 +12,8 @@
 
 namespace nova {
 
+struct DeviceInfo;
+
 struct HashGridConfig {
   int levels = 16;
   int features = 2;          // per level
@@ -48,5 +50,13 @@ Tensor hash_grid_table(Graph& g, const std::string& name, const HashGridConfig& 
 // Output [M, L * F] or [B, M, L * F]. Differentiable in the table only (sample positions are
 // never trained).
 Tensor hash_encoding(Tensor positions, Tensor table, const HashGridConfig& c);
+
+// How the table gradient is summed; both are bit-reproducible. Ordered: one work-item per
+// network and level walks the rows in order (float sums). Atomic: one work-item per row and
+// level, fixed-point 64-bit atomics (exact integer sums, rounded to float once), needs
+// cl_khr_int64_base_atomics. NOVA_HASH_BACKWARD=auto|ordered|atomic chooses; auto takes
+// atomic on devices other than CPUs that have the extension.
+enum class HashBackward { Ordered, Atomic };
+HashBackward hash_backward_choice(const DeviceInfo& device);
 
 }  // namespace nova

@@ -37,6 +37,7 @@ struct DeviceInfo {
   bool fp64 = false;
   bool unified_memory = false;
   bool native_kernels = false;  // CL_EXEC_NATIVE_KERNEL: runs host functions in queue order
+  bool int64_atomics = false;   // cl_khr_int64_base_atomics (the hash grid's parallel backward)
 
   std::string type_name() const;  // "GPU", "CPU", "ACCELERATOR", ...
   std::string id() const;         // "P:D", the selector form
