@@ -16,6 +16,7 @@ int render(const Args& args);
 int tradeoff(const Args& args);  // needs nova_io (scenes, metrics, the plot)
 int view(const Args& args);      // needs nova_io (the run's scene)
 int accuracy(const Args& args);  // needs nova_io (scenes, metrics, pictures)
+int step(const Args& args);      // needs nova_io (the scene)
 #endif
 
 struct Benchmark {

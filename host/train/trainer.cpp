@@ -75,6 +75,10 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
 
 Trainer::~Trainer() = default;
 
+size_t Trainer::device_bytes() const {
+  return exec_ ? exec_->plan().peak_bytes + 4 * exec_->parameter_floats() * sizeof(float) : 0;
+}
+
 long Trainer::total_steps() const {
   return static_cast<long>(config_.pretrain_steps) + static_cast<long>(config_.steps);
 }

@@ -55,8 +55,15 @@ class Trainer {
   // holds the joint (or, before it, the pretraining) graph's per-op times.
   void set_profile(bool on) { profile_ = on; }
   std::string profile_table() const { return exec_ ? exec_->profile_table() : std::string(); }
+  // Forgets the timings so far (e.g. those of warm-up steps, which include kernel builds).
+  void reset_profile() {
+    if (exec_) exec_->reset_timings();
+  }
 
   long step() const { return step_; }
+  // Device bytes of the current phase's step: the planned activation arena, the parameters,
+  // their gradients and Adam's two moments (0 before the first step).
+  size_t device_bytes() const;
   long total_steps() const;
   const std::string& run_dir() const { return run_dir_; }
   // The current state as a checkpoint (what run() writes).

@@ -1,0 +1,165 @@
+// nova-bench step: the training step itself, per preset (quick, reference), phase (static
+// pretraining, joint) and number of object NeRFs K, on a scene of the user's: seconds per
+// step and rays/s over timed steps after a warm-up, the device memory of the step (memory
+// plan, parameters, gradients, Adam) and the process's peak RSS, then a per-op table from a
+// few profiled steps. Occupancy skipping is off (its warm-up would need a trained model): the
+// numbers are those of the dense step, the most a step costs. Built only with nova_io.
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "bench.hpp"
+#include "nova/runtime.hpp"
+#include "nova/scene_io.hpp"
+#include "nova/train_config.hpp"
+#include "nova/trainer.hpp"
+#include "options.hpp"
+
+namespace nova::bench {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream s(text);
+  for (std::string item; std::getline(s, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// The scene with only its first K objects: the others' pixels join the background mask.
+Scene with_objects(Scene scene, int K) {
+  for (Frame& f : scene.frames) {
+    for (size_t k = static_cast<size_t>(K) + 1; k < f.masks.size(); ++k)
+      for (size_t i = 0; i < f.masks[0].data.size(); ++i)
+        f.masks[0].data[i] = std::max(f.masks[0].data[i], f.masks[k].data[i]);
+    f.masks.resize(static_cast<size_t>(K) + 1);
+  }
+  scene.num_objects = K;
+  return scene;
+}
+
+double peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
+}
+
+struct Row {
+  std::string preset, phase;
+  int objects = 0, rays = 0, samples = 0;
+  double seconds = 0, device_mb = 0, rss_mb = 0;
+};
+
+}  // namespace
+
+int step(const Args& args) {
+  const Options o(args, {{"scene", ""}, {"presets", "quick,reference"}, {"objects", "1,2"}, {"steps", "5"},
+                         {"warmup", "2"}, {"profile-steps", "2"}, {"factor", "1"}, {"device", ""},
+                         {"out", ""}});
+  if (o.help()) {
+    std::cout << o.usage("nova-bench step") << "\n--objects: numbers of object NeRFs K (the scene's first K)\n";
+    return 0;
+  }
+  if (o.str("scene").empty()) throw Error("--scene SCENE is required (e.g. the default synthetic scene of nova synth)");
+  const long steps = o.integer("steps"), warmup = o.integer("warmup"), profile_steps = o.integer("profile-steps");
+  if (steps < 1 || warmup < 0 || profile_steps < 0) throw Error("--steps must be >= 1, --warmup and --profile-steps >= 0");
+  LoadOptions lo;
+  lo.factor = static_cast<int>(o.integer("factor"));
+  lo.load_gt = false;
+  const Scene scene = load_scene(o.str("scene"), lo);
+  std::vector<int> objects;
+  for (long k : o.integers("objects")) {
+    if (k < 1 || k > scene.num_objects)
+      throw Error("--objects: " + std::to_string(k) + " object NeRFs, but the scene has " +
+                  std::to_string(scene.num_objects));
+    objects.push_back(static_cast<int>(k));
+  }
+  std::vector<TrainConfig> presets;
+  for (const std::string& p : split_list(o.str("presets"))) presets.push_back(preset_config(p));
+  const std::vector<std::string> preset_list = split_list(o.str("presets"));
+
+  const fs::path scratch = fs::temp_directory_path() / ("nova-bench-step-" + std::to_string(::getpid()));
+  struct Cleanup {
+    fs::path p;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } cleanup{scratch};
+
+  Runtime rt(select_device(o.str("device")), false);
+  Runtime prt(rt.info(), true);  // a profiling runtime for the per-op tables
+  std::cout << "device " << rt.info().name << "; scene " << o.str("scene") << " (" << scene.frames[0].camera.width
+            << "x" << scene.frames[0].camera.height << ", " << scene.num_objects << " objects); " << warmup
+            << " warm-up + " << steps << " timed steps per row, occupancy skipping off (the dense step)\n\n";
+  std::vector<Row> rows;
+  std::ostringstream profiles;
+  for (size_t pi = 0; pi < presets.size(); ++pi)
+    for (const bool joint : {false, true})
+      for (int K : objects) {
+        if (!joint && K != objects.front()) continue;  // pretraining has no object NeRFs
+        TrainConfig c = presets[pi];
+        c.occupancy = false;
+        const int total = static_cast<int>(warmup + std::max(steps, profile_steps));
+        c.pretrain_steps = joint ? 0 : total;
+        c.steps = joint ? total : 0;
+        c.log_every = 1000000;
+        c.checkpoint_every = 1000000;
+        const Scene s = with_objects(scene, K);
+        Row r;
+        r.preset = preset_list[pi];
+        r.phase = joint ? "joint" : "pretrain";
+        r.objects = joint ? K : 0;
+        r.rays = c.rays;
+        r.samples = c.samples;
+        {
+          Trainer t(rt, s, c, (scratch / "run").string());
+          t.run({}, warmup);
+          rt.finish();
+          const auto a = std::chrono::steady_clock::now();
+          t.run({}, warmup + steps);
+          rt.finish();
+          r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count() / static_cast<double>(steps);
+          r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
+        }
+        r.rss_mb = peak_rss_mb();
+        if (profile_steps > 0) {
+          Trainer t(prt, s, c, (scratch / "profile").string());
+          t.set_profile(true);
+          t.run({}, warmup);
+          t.reset_profile();
+          t.run({}, warmup + profile_steps);
+          profiles << "\n" << r.preset << " " << r.phase << (joint ? " K=" + std::to_string(K) : std::string())
+                   << " (" << profile_steps << " profiled steps)\n" << t.profile_table();
+        }
+        rows.push_back(r);
+        std::cout << std::left << std::setw(10) << r.preset << std::setw(9) << r.phase << "K=" << std::setw(3) << r.objects
+                  << std::right << std::fixed << std::setprecision(3) << std::setw(9) << r.seconds << " s/step"
+                  << std::setprecision(0) << std::setw(9) << r.rays / r.seconds << " rays/s" << std::setw(8)
+                  << r.device_mb << " MB device" << std::setw(7) << r.rss_mb << " MB peak RSS" << std::endl;
+      }
+  std::ostringstream csv;
+  csv << "preset,phase,objects,rays,samples,seconds_per_step,rays_per_second,device_mb,peak_rss_mb\n";
+  for (const Row& r : rows)
+    csv << r.preset << "," << r.phase << "," << r.objects << "," << r.rays << "," << r.samples << "," << r.seconds
+        << "," << r.rays / r.seconds << "," << r.device_mb << "," << r.rss_mb << "\n";
+  std::cout << "\n" << csv.str() << profiles.str();
+  if (!o.str("out").empty()) {
+    const std::string tmp = o.str("out") + ".tmp";
+    std::ofstream(tmp) << csv.str();
+    fs::rename(tmp, o.str("out"));
+    std::cout << "\nwrote " << o.str("out") << "\n";
+  }
+  return 0;
+}
+
+}  // namespace nova::bench

@@ -1,0 +1,81 @@
+// nova-bench step on the tiny synthetic scene: one row per phase and object count with a
+// positive step time and device memory in its CSV, a per-op table, and bad inputs refused
+// (exit code 2, a line naming the input, no CSV left behind).
+#include <boost/test/unit_test.hpp>
+#include <cstdlib>
+#include <sstream>
+#include <sys/wait.h>
+
+#include "scene_test_util.hpp"
+
+namespace nova::test {
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result run_bench_step(const std::string& args, const TempDir& dir) {
+  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
+  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova-bench step " + args + " >" + out + " 2>" + err;
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(out), read_all(err)};
+}
+
+bool has_bench() { return fs::exists(fs::path(NOVA_BINARY_DIR) / "nova-bench"); }
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(bench_step)
+
+BOOST_AUTO_TEST_CASE(rows_for_each_phase_and_object_count, *boost::unit_test::precondition([](auto) { return has_bench(); })) {
+  TempDir dir("bench-step");
+  const fs::path csv = dir / "step.csv";
+  const Result r = run_bench_step("--scene " + cached_tiny_scene().string() +
+                                  " --presets quick --objects 1,2 --steps 1 --warmup 1 --profile-steps 1 --out " +
+                                  csv.string(),
+                              dir);
+  BOOST_TEST_REQUIRE(r.code == 0, r.err);
+  std::istringstream lines(read_all(csv));
+  std::string line;
+  std::getline(lines, line);
+  BOOST_TEST(line.rfind("preset,phase,objects,", 0) == 0u);
+  std::vector<std::string> rows;
+  while (std::getline(lines, line)) rows.push_back(line);
+  BOOST_REQUIRE(rows.size() == 3u);  // pretrain, joint K=1, joint K=2
+  BOOST_TEST(rows[0].rfind("quick,pretrain,0,", 0) == 0u);
+  BOOST_TEST(rows[1].rfind("quick,joint,1,", 0) == 0u);
+  BOOST_TEST(rows[2].rfind("quick,joint,2,", 0) == 0u);
+  for (const std::string& row : rows) {
+    std::vector<double> v;
+    std::istringstream cells(row);
+    for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::atof(cell.c_str()));
+    BOOST_REQUIRE(v.size() == 9u);
+    BOOST_TEST(v[5] > 0.0);  // seconds per step
+    BOOST_TEST(v[7] > 0.0);  // device MB
+    BOOST_TEST(v[8] > 0.0);  // peak RSS MB
+  }
+  BOOST_TEST(r.out.find("hash_encoding (backward)") != std::string::npos);  // the per-op tables
+}
+
+BOOST_AUTO_TEST_CASE(bad_inputs_are_refused, *boost::unit_test::precondition([](auto) { return has_bench(); })) {
+  TempDir dir("bench-step-bad");
+  const fs::path csv = dir / "step.csv";
+  const std::string scene = " --scene " + cached_tiny_scene().string();
+  for (const auto& [args, names] : std::vector<std::pair<std::string, std::string>>{
+           {scene + " --objects 9", "--objects"},
+           {scene + " --presets fast", "fast"},
+           {scene + " --steps 0", "--steps"},
+           {" --scene " + (dir / "missing").string(), "missing"},
+           {"", "--scene"}}) {
+    const Result r = run_bench_step(args + " --out " + csv.string(), dir);
+    BOOST_TEST(r.code == 2, args);
+    BOOST_TEST(r.err.find(names) != std::string::npos, args << ": " << r.err);
+    BOOST_TEST(!fs::exists(csv), args);
+  }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+}  // namespace nova::test
