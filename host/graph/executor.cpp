@@ -302,8 +302,8 @@ void Executor::backward() {
   if (!forward_done_) throw Error("backward() before forward()", kExitInternal);
   forward_done_ = false;
   if (!has_grad_[loss.id]) return;  // the loss depends on no parameter
-  const float one = 1.0f;
-  rt_.upload(grads_[loss.id].get(), &one, sizeof(one));
+  // Queued, not a blocking write: the backward is enqueued while the forward still runs.
+  rt_.fill_floats(grads_[loss.id].get(), 1.0f, sizeof(float));
   run_pass(backward_nodes_, Pass::Backward);
 }
 
@@ -339,7 +339,9 @@ void Executor::set(Tensor t, const float* values, size_t count) {
                     std::to_string(info.shape.numel()) + " values) but " + std::to_string(count) +
                     " were given",
                 kExitInternal);
-  rt_.upload(values_[t.id].get(), values, count * sizeof(float));
+  // In queue order, without waiting for the device: the host prepares the next step's data
+  // while the current one runs.
+  rt_.upload_async(values_[t.id].get(), values, count * sizeof(float));
 }
 
 void Executor::set(Tensor t, const std::vector<float>& values) {

@@ -156,6 +156,42 @@ void Runtime::upload(cl_mem dst, const void* src, size_t bytes, size_t offset) {
            "clEnqueueWriteBuffer");
 }
 
+namespace {
+void CL_CALLBACK free_staging(cl_event event, cl_int, void* block) {
+  delete[] static_cast<unsigned char*>(block);
+  clReleaseEvent(event);
+}
+}  // namespace
+
+void Runtime::upload_async(cl_mem dst, const void* src, size_t bytes, size_t offset) {
+  if (bytes == 0) return;
+  ++transfers_.writes;
+  transfers_.write_bytes += bytes;
+  transfers_.largest_write = std::max(transfers_.largest_write, bytes);
+  auto* block = new unsigned char[bytes];
+  std::memcpy(block, src, bytes);
+  cl_event done = nullptr;
+  const cl_int st = clEnqueueWriteBuffer(queue_, dst, CL_FALSE, offset, bytes, block, 0, nullptr, &done);
+  if (st != CL_SUCCESS) {
+    delete[] block;
+    cl_check(st, "clEnqueueWriteBuffer");
+  }
+  // The callback also runs when the command ends in error (a negative status): the block is
+  // freed either way.
+  const cl_int cb = clSetEventCallback(done, CL_COMPLETE, free_staging, block);
+  if (cb != CL_SUCCESS) {
+    clWaitForEvents(1, &done);
+    free_staging(done, CL_COMPLETE, block);
+    cl_check(cb, "clSetEventCallback");
+  }
+}
+
+void Runtime::fill_floats(cl_mem dst, float value, size_t bytes, size_t offset) {
+  if (bytes == 0) return;
+  cl_check(clEnqueueFillBuffer(queue_, dst, &value, sizeof(value), offset, bytes, 0, nullptr, nullptr),
+           "clEnqueueFillBuffer");
+}
+
 void Runtime::download(cl_mem src, void* dst, size_t bytes, size_t offset) {
   if (bytes == 0) return;
   ++transfers_.reads;

@@ -158,7 +158,13 @@ class Runtime {
   Buffer sub_buffer(const Buffer& parent, size_t offset, size_t bytes);
   const TransferStats& transfers() const { return transfers_; }
   void reset_transfers() { transfers_ = {}; }
+  // Blocking: returns when the data is on the device, i.e. after everything queued before.
   void upload(cl_mem dst, const void* src, size_t bytes, size_t offset = 0);
+  // Returns at once: the bytes are copied to a staging block that the queue writes from in
+  // order and frees when done, so the host never waits for the device to drain.
+  void upload_async(cl_mem dst, const void* src, size_t bytes, size_t offset = 0);
+  // dst[i] = value for the floats of [offset, offset + bytes); queued, non-blocking.
+  void fill_floats(cl_mem dst, float value, size_t bytes, size_t offset = 0);
   void download(cl_mem src, void* dst, size_t bytes, size_t offset = 0);
   void fill_zero(cl_mem dst, size_t bytes, size_t offset = 0);
   void finish();
