@@ -713,6 +713,58 @@ BOOST_AUTO_TEST_CASE(depth_loss_kernels) {
   expect_close(run.d_raw, ffd, 1e-5 * max_abs(ffd), 1e-3, "d free_space_loss / d raw");
 }
 
+// termination.cl: a chunk of kRows rays (the last 5 padding) in two segments with random
+// segment composites, against a float64 replay of C = C_1 + T_1 C_2 and the open/stopped
+// counts. Each output is one or two float32 products and sums: rtol 1e-6, atol 1e-7.
+BOOST_AUTO_TEST_CASE(termination_kernels) {
+  Runtime& r = rt();
+  const size_t R = kRows, n = kRows - 5, N = 2;
+  const float below = 0.3f;
+  auto buf = [&](size_t bytes) { return r.alloc(bytes); };
+  Buffer T = buf(R * 4), open = buf(R), was = buf(R), counts = buf(8), rgb = buf(R * 12), depth = buf(R * 4),
+         acc = buf(R * 4), mask = buf(N * R * 4);
+  r.launch("termination", "termination_start").arg(T).arg(open).arg(rgb).arg(depth).arg(acc).arg(mask)
+      .arg(unsigned(R)).arg(unsigned(n)).arg(unsigned(N)).run(R);
+  std::vector<double> t_ref(R), rgb_ref(R * 3, 0.0), depth_ref(R, 0.0), acc_ref(R, 0.0), mask_ref(N * R, 0.0);
+  for (size_t i = 0; i < R; ++i) t_ref[i] = i < n ? 1.0 : 0.0;
+  std::vector<uint8_t> open_ref(R, 0);
+  for (int k = 0; k < 2; ++k) {
+    r.launch("termination", "termination_open").arg(T).arg(open).arg(was).arg(unsigned(R)).arg(below).run(R);
+    r.launch("termination", "termination_count").arg(open).arg(was).arg(counts).arg(unsigned(R)).arg(int(k == 0)).run(1);
+    uint32_t got[2];
+    r.download(counts.get(), got, sizeof(got));
+    size_t live = 0, stopped = 0;
+    for (size_t i = 0; i < R; ++i) {
+      const bool now = t_ref[i] >= below;
+      stopped += k > 0 && open_ref[i] && !now;
+      open_ref[i] = now;
+      live += now;
+    }
+    BOOST_TEST(got[0] == live);
+    BOOST_TEST(got[1] == stopped);
+    // Segment composites: acc in [0, 1.2] so that some rays close (T < 0.3) after the first.
+    const auto s_rgb = random_floats(R * 3, 0, 1, 140 + k), s_depth = random_floats(R, 0, 1, 142 + k),
+               s_acc = random_floats(R, 0, 1.2f, 144 + k), s_mask = random_floats(N * R, 0, 1, 146 + k);
+    Buffer a = r.upload_floats(s_rgb), b = r.upload_floats(s_depth), c = r.upload_floats(s_acc), d = r.upload_floats(s_mask);
+    r.launch("termination", "termination_accumulate").arg(a).arg(b).arg(c).arg(d).arg(open).arg(T).arg(rgb).arg(depth)
+        .arg(acc).arg(mask).arg(unsigned(R)).arg(unsigned(N)).run(R);
+    for (size_t i = 0; i < R; ++i) {
+      if (!open_ref[i]) continue;
+      const double t = t_ref[i];
+      for (size_t j = 0; j < 3; ++j) rgb_ref[i * 3 + j] += t * s_rgb[i * 3 + j];
+      depth_ref[i] += t * s_depth[i];
+      acc_ref[i] += t * s_acc[i];
+      for (size_t m = 0; m < N; ++m) mask_ref[m * R + i] += t * s_mask[m * R + i];
+      t_ref[i] = t * std::max(0.0, 1.0 - double(s_acc[i]));
+    }
+  }
+  expect_close(r.download_floats(T.get(), R), t_ref, 1e-7, 1e-6, "termination T");
+  expect_close(r.download_floats(rgb.get(), R * 3), rgb_ref, 1e-7, 1e-6, "termination rgb");
+  expect_close(r.download_floats(depth.get(), R), depth_ref, 1e-7, 1e-6, "termination depth");
+  expect_close(r.download_floats(acc.get(), R), acc_ref, 1e-7, 1e-6, "termination acc");
+  expect_close(r.download_floats(mask.get(), N * R), mask_ref, 1e-7, 1e-6, "termination masks");
+}
+
 // The sweep above covers every kernel of every embedded family (parsed from the sources).
 BOOST_AUTO_TEST_CASE(every_kernel_ran_at_an_odd_size,
                      *utf::depends_on("odd_sizes/encoding") *
@@ -725,7 +777,8 @@ BOOST_AUTO_TEST_CASE(every_kernel_ran_at_an_odd_size,
                          utf::depends_on("odd_sizes/render_reference_options") *
                          utf::depends_on("odd_sizes/sampling") *
                          utf::depends_on("odd_sizes/own_gemm_kernels") *
-                         utf::depends_on("odd_sizes/depth_loss_kernels")) {
+                         utf::depends_on("odd_sizes/depth_loss_kernels") *
+                         utf::depends_on("odd_sizes/termination_kernels")) {
   std::map<std::pair<std::string, std::string>, std::vector<LaunchRecord>> by_kernel;
   for (const LaunchRecord& r : rt().launches()) by_kernel[{r.family, r.name}].push_back(r);
   size_t kernels = 0;

@@ -72,22 +72,23 @@ std::vector<std::vector<size_t>> reference_kept(const std::vector<float>& pos, c
   return kept;
 }
 
-// Early termination's rules on top of the grids (PackSelect::samples_per_ray): sample index
-// m % S in [first, end) of rays m / S that are open. Plain integer logic, the reference of
-// the pack op's loop over rays and ranges.
-bool in_sample_range(const PackSelect& s, size_t m) {
-  if (s.samples_per_ray == 0) return true;
-  const size_t i = m % s.samples_per_ray, r = m / s.samples_per_ray;
-  return i >= s.first_sample && i < s.end_sample && (s.open_rays.empty() || s.open_rays[r]);
+// Early termination's rules on top of the grids (SampleRange): sample index m % S in
+// [first, end) of rays m / S that are open (`open`: the host copy of the range's flags, empty
+// when it has none). Plain integer logic, the reference of the pack kernels.
+bool in_sample_range(const PackSelect& s, const std::vector<uint8_t>& open, size_t m) {
+  const SampleRange& g = s.range;
+  if (g.samples_per_ray == 0) return true;
+  const size_t i = m % g.samples_per_ray, r = m / g.samples_per_ray;
+  return i >= g.first && i < g.end && (open.empty() || open[r]);
 }
 
 // The kept rows of `rows` per batch: grids (when enabled) and the sample range.
 std::vector<std::vector<size_t>> reference_range_kept(const std::vector<float>& pos, const PackSelect& s,
-                                                      size_t rows) {
+                                                      const std::vector<uint8_t>& open, size_t rows) {
   std::vector<std::vector<size_t>> kept(B);
   for (size_t b = 0; b < B; ++b)
     for (size_t m = 0; m < rows; ++m) {
-      bool keep = in_sample_range(s, m);
+      bool keep = in_sample_range(s, open, m);
       if (keep && s.enabled && s.grids) {
         const OccupancyGrid& g = (*s.grids)[static_cast<size_t>(s.grid_of_batch[b])];
         size_t c = 0;
@@ -247,28 +248,24 @@ BOOST_AUTO_TEST_CASE(sample_range_and_open_rays_match_reference) {
   std::vector<uint8_t> open(rays);
   const auto coin = random_floats(rays, 0.0f, 1.0f, 52);
   for (size_t r = 0; r < rays; ++r) open[r] = coin[r] < 0.5f;
+  Buffer flags = test::runtime().alloc(rays);
+  test::runtime().upload(flags.get(), open.data(), rays);
   for (bool grids : {true, false}) {
     auto sel = two_grid_select();
     if (!grids) sel->grids = nullptr;
-    sel->samples_per_ray = S;
-    sel->first_sample = 3;
-    sel->end_sample = 9;
-    sel->open_rays = open;
+    sel->range = {S, 3, 9, flags.get(), rays};
     const auto out = run_pack_roundtrip(sel, pos, rows);
-    const auto kept = reference_range_kept(pos, *sel, rows);
+    const auto kept = reference_range_kept(pos, *sel, open, rows);
     BOOST_TEST(sel->kept == kept[0].size() + kept[1].size());
     test::expect_close(out, roundtrip_reference(pos, kept, rows), 0, 0, grids ? "range on grids" : "range alone");
     // Each rule must drop rows the others keep, or this case would not see it applied:
-    // without the open mask, or with the whole range, the reference keeps more.
-    PackSelect wider = *sel;
-    wider.open_rays.clear();
+    // without the open flags, or with the whole range, the reference keeps more.
     PackSelect longer = *sel;
-    longer.first_sample = 0;
-    longer.end_sample = S;
-    for (const PackSelect* other : {&wider, &longer}) {
-      const auto more = reference_range_kept(pos, *other, rows);
-      BOOST_TEST(more[0].size() + more[1].size() > sel->kept);
-    }
+    longer.range.first = 0;
+    longer.range.end = S;
+    const auto more_open = reference_range_kept(pos, *sel, {}, rows);
+    const auto more_long = reference_range_kept(pos, longer, open, rows);
+    for (const auto* more : {&more_open, &more_long}) BOOST_TEST((*more)[0].size() + (*more)[1].size() > sel->kept);
     BOOST_TEST(sel->kept > 0u);
   }
 }
@@ -277,7 +274,11 @@ BOOST_AUTO_TEST_CASE(no_sample_range_ignores_open_rays) {
   constexpr size_t rays = 97, S = 12, rows = rays * S;
   auto sel = two_grid_select();
   sel->enabled = false;
-  sel->open_rays.assign(rays, 0);  // read only with samples_per_ray > 0
+  Buffer closed = test::runtime().alloc(rays);
+  const std::vector<uint8_t> zeros(rays, 0);
+  test::runtime().upload(closed.get(), zeros.data(), rays);
+  sel->range.open_rays = closed.get();  // read only with samples_per_ray > 0
+  sel->range.open_rays_count = rays;
   const auto pos = random_floats(B * rows * D, -1.0f, 1.0f, 61);
   const auto out = run_pack_roundtrip(sel, pos, rows);
   BOOST_TEST(sel->kept == B * rows);
@@ -287,17 +288,18 @@ BOOST_AUTO_TEST_CASE(no_sample_range_ignores_open_rays) {
 BOOST_AUTO_TEST_CASE(bad_sample_ranges_are_refused) {
   constexpr size_t rays = 97, S = 12, rows = rays * S;
   const auto pos = random_floats(B * rows * D, -1.0f, 1.0f, 71);
+  Buffer flags = test::runtime().alloc(rays);
   auto expect_refused = [&](auto change) {
     auto sel = two_grid_select();
-    sel->samples_per_ray = S;
-    sel->end_sample = S;
-    change(*sel);
+    sel->range.samples_per_ray = S;
+    sel->range.end = S;
+    change(sel->range);
     BOOST_CHECK_THROW(run_pack_roundtrip(sel, pos, rows), Error);
   };
-  expect_refused([](PackSelect& s) { s.end_sample = S + 1; });
-  expect_refused([](PackSelect& s) { s.first_sample = 5, s.end_sample = 4; });
-  expect_refused([](PackSelect& s) { s.open_rays.assign(rays - 1, 1); });
-  expect_refused([](PackSelect& s) { s.samples_per_ray = 7; });  // 1164 rows are no rays of 7
+  expect_refused([](SampleRange& r) { r.end = S + 1; });
+  expect_refused([](SampleRange& r) { r.first = 5, r.end = 4; });
+  expect_refused([&](SampleRange& r) { r.open_rays = flags.get(), r.open_rays_count = rays - 1; });
+  expect_refused([](SampleRange& r) { r.samples_per_ray = 7; });  // 1164 rows are no rays of 7
 }
 
 BOOST_AUTO_TEST_CASE(gradients_flow_through_packed_rows) {

@@ -155,10 +155,16 @@ InstancePivot ViewRenderer::pivot_for(const ComposeInstance& inst) {
   return {{0, 0, 0}, InstancePivot::From::Origin};
 }
 
+// A chunk's early-termination state on the device (kernels/termination.cl).
+struct Termination {
+  Buffer T, open, was_open, counts, rgb, depth, acc, mask;
+};
+
 struct ViewRenderer::Cached {
   std::unique_ptr<ViewGraph> graph;
   std::unique_ptr<Executor> exec;
   std::vector<int> loaded_objects;  // which object's weights each instance slot holds
+  Termination termination;
 };
 
 ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeometry& geometry,
@@ -319,7 +325,21 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
   // one-pass chunks since. Per view, so that a render depends on its request alone.
   bool pays = true;
   int since_probe = 0;
-  std::vector<float> pixels(R * 2);
+  // The chunk's state on the device (termination.cl): transmittance, open flags, the
+  // composite accumulated over segments; two counts per segment come back to the host.
+  Termination& d = c.termination;
+  if (!d.T) {
+    d.T = rt_.alloc(R * sizeof(float));
+    d.open = rt_.alloc(R);
+    d.was_open = rt_.alloc(R);
+    d.counts = rt_.alloc(2 * sizeof(uint32_t));
+    d.rgb = rt_.alloc(R * 3 * sizeof(float));
+    d.depth = rt_.alloc(R * sizeof(float));
+    d.acc = rt_.alloc(R * sizeof(float));
+    d.mask = rt_.alloc(static_cast<size_t>(N) * R * sizeof(float));
+  }
+  const unsigned rays = static_cast<unsigned>(R), nerfs = static_cast<unsigned>(N);
+  std::vector<float> pixels(R * 2), rgb(R * 3), depth(R), acc(R), mask(static_cast<size_t>(N) * R);
   for (size_t first = 0; first < P; first += R) {
     const size_t n = std::min(R, P - first);
     for (size_t r = 0; r < R; ++r) {
@@ -328,32 +348,27 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
       pixels[r * 2 + 1] = static_cast<float>(p / static_cast<size_t>(W));
     }
     c.exec->set(vg.pixels, pixels);
-    // Transmittance left before each segment. A padded ray is closed from the start: a packed
-    // graph then evaluates none of its samples, whether or not rays terminate.
-    std::vector<float> T(R, 0.0f);
-    std::fill_n(T.begin(), n, 1.0f);
-    std::vector<uint8_t> open(R, 0);
+    // A padded ray is closed from the start: a packed graph then evaluates none of its
+    // samples, whether or not rays terminate.
+    rt_.launch("termination", "termination_start")
+        .arg(d.T).arg(d.open).arg(d.rgb).arg(d.depth).arg(d.acc).arg(d.mask).arg(rays)
+        .arg(static_cast<unsigned>(n)).arg(nerfs).run(R);
     const bool split = passes.size() > 2 && (pays || since_probe >= termination_.probe_every);
     since_probe = split ? 0 : since_probe + 1;
     stats_.split.push_back(split);
     const std::vector<size_t>& bounds = split ? passes : whole;
     size_t stopped = 0;
     for (size_t k = 0; k + 1 < bounds.size(); ++k) {
-      size_t live = 0;
-      for (size_t r = 0; r < n; ++r) {
-        const bool now = T[r] >= termination_.below;
-        if (k > 0 && open[r] && !now) ++stopped;
-        open[r] = now;
-        live += now;
-      }
-      if (live == 0) break;
+      rt_.launch("termination", "termination_open")
+          .arg(d.T).arg(d.open).arg(d.was_open).arg(rays).arg(termination_.below).run(R);
+      rt_.launch("termination", "termination_count")
+          .arg(d.open).arg(d.was_open).arg(d.counts).arg(rays).arg(static_cast<int>(k == 0)).run(1);
+      uint32_t counts[2];
+      rt_.download(d.counts.get(), counts, sizeof(counts));
+      stopped += counts[1];
+      if (counts[0] == 0) break;
       for (auto& pack : {vg.pack_static, vg.pack_objects})
-        if (pack) {
-          pack->samples_per_ray = S;
-          pack->first_sample = bounds[k];
-          pack->end_sample = bounds[k + 1];
-          pack->open_rays = open;
-        }
+        if (pack) pack->range = {S, bounds[k], bounds[k + 1], d.open.get(), R};
       c.exec->forward();
       ++stats_.passes;
       for (auto& pack : {vg.pack_static, vg.pack_objects})
@@ -362,20 +377,21 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
           if (k > 0) stats_.late += pack->kept;
         }
       if (!vg.pack_static && !vg.pack_objects) stats_.evaluated += R * S * static_cast<size_t>(N);
-      const std::vector<float> rgb = c.exec->get(vg.out.rgb), depth = c.exec->get(vg.out.depth),
-                               acc = c.exec->get(vg.out.acc), mask = c.exec->get(vg.out.mask);
-      // C = C_1 + T_1 C_2: each segment's composite scaled by what the earlier ones left.
-      for (size_t r = 0; r < n; ++r) {
-        if (!open[r]) continue;
-        const size_t p = first + r;
-        for (int j = 0; j < 3; ++j) img.rgb[p * 3 + j] += T[r] * rgb[r * 3 + j];
-        img.depth[p] += T[r] * depth[r];
-        img.acc[p] += T[r] * acc[r];
-        for (size_t m = 0; m < static_cast<size_t>(N); ++m) img.masks[m][p] += T[r] * mask[m * R + r];
-        // acc = 1 - (transmittance after the segment) up to float rounding and the 1e-10
-        // per sample of render.cl's product; clamped, as rounding may push acc past 1.
-        T[r] *= std::max(0.0f, 1.0f - acc[r]);
-      }
+      rt_.launch("termination", "termination_accumulate")
+          .arg(c.exec->buffer(vg.out.rgb)).arg(c.exec->buffer(vg.out.depth)).arg(c.exec->buffer(vg.out.acc))
+          .arg(c.exec->buffer(vg.out.mask)).arg(d.open).arg(d.T).arg(d.rgb).arg(d.depth).arg(d.acc).arg(d.mask)
+          .arg(rays).arg(nerfs).run(R);
+    }
+    rt_.download(d.rgb.get(), rgb.data(), rgb.size() * sizeof(float));
+    rt_.download(d.depth.get(), depth.data(), depth.size() * sizeof(float));
+    rt_.download(d.acc.get(), acc.data(), acc.size() * sizeof(float));
+    rt_.download(d.mask.get(), mask.data(), mask.size() * sizeof(float));
+    for (size_t r = 0; r < n; ++r) {
+      const size_t p = first + r;
+      for (int j = 0; j < 3; ++j) img.rgb[p * 3 + j] = rgb[r * 3 + j];
+      img.depth[p] = depth[r];
+      img.acc[p] = acc[r];
+      for (size_t m = 0; m < static_cast<size_t>(N); ++m) img.masks[m][p] = mask[m * R + r];
     }
     stats_.terminated += stopped;
     if (split) pays = static_cast<double>(stopped) >= static_cast<double>(termination_.pays_from) * static_cast<double>(n);

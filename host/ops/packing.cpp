@@ -38,12 +38,11 @@ class PackOp final : public Op {
     Runtime& rt = ctx.rt;
     ensure_scratch(rt);
     if (test) upload_grids(rt, s);
-    const bool use_open = !range.open.empty();
-    if (use_open) rt.upload(open_.get(), range.open.data(), range.open.size());
+    const bool use_open = range.open != nullptr;
     const std::string opts = "-DPACK_BLOCK=" + std::to_string(kPackBlock);
     const unsigned nb = detail::u32(blocks_, "pack blocks");
     ctx.launch("packing", "pack_flags", opts)
-        .arg(ctx.in(0)).arg(occupied_).arg(cell_offset_).arg(res_).arg(bound_).arg(scale_).arg(open_)
+        .arg(ctx.in(0)).arg(occupied_).arg(cell_offset_).arg(res_).arg(bound_).arg(scale_).arg(use_open ? range.open : open_.get())
         .arg(flags_).arg(B).arg(M).arg(static_cast<unsigned>(ctx.in_shape(0).rank() == 3))
         .arg(detail::u32(range.per_ray, "samples per ray")).arg(detail::u32(range.first, "first sample"))
         .arg(detail::u32(range.end, "end sample")).arg(static_cast<int>(test)).arg(static_cast<int>(use_open))
@@ -75,20 +74,20 @@ class PackOp final : public Op {
   // without a sample range, one "ray" holding every row.
   struct Range {
     size_t per_ray = 0, first = 0, end = 0;
-    const std::vector<uint8_t>& open;
+    cl_mem open = nullptr;
     bool keeps_all = false;
   };
   Range sample_range(const PackSelect& s) const {
-    static const std::vector<uint8_t> all;
-    if (s.samples_per_ray == 0) return {rows_, 0, rows_, all, true};
-    const size_t S = s.samples_per_ray;
-    if (rows_ % S != 0 || s.first_sample > s.end_sample || s.end_sample > S)
-      throw Error("pack_occupied: samples [" + std::to_string(s.first_sample) + ", " + std::to_string(s.end_sample) +
+    const SampleRange& r = s.range;
+    if (r.samples_per_ray == 0) return {rows_, 0, rows_, nullptr, true};
+    const size_t S = r.samples_per_ray;
+    if (rows_ % S != 0 || r.first > r.end || r.end > S)
+      throw Error("pack_occupied: samples [" + std::to_string(r.first) + ", " + std::to_string(r.end) +
                   ") of " + std::to_string(S) + " per ray do not fit " + std::to_string(rows_) + " rows", kExitInternal);
-    if (!s.open_rays.empty() && s.open_rays.size() != rows_ / S)
-      throw Error("pack_occupied: " + std::to_string(s.open_rays.size()) + " open-ray flags for " +
+    if (r.open_rays && r.open_rays_count != rows_ / S)
+      throw Error("pack_occupied: " + std::to_string(r.open_rays_count) + " open-ray flags for " +
                   std::to_string(rows_ / S) + " rays", kExitInternal);
-    return {S, s.first_sample, s.end_sample, s.open_rays, s.first_sample == 0 && s.end_sample == S && s.open_rays.empty()};
+    return {S, r.first, r.end, r.open_rays, r.first == 0 && r.end == S && !r.open_rays};
   }
 
   // Per-run scratch, owned by the op (B x M flag bytes and a few counts per block).
@@ -97,7 +96,7 @@ class PackOp final : public Op {
     flags_ = rt.alloc(std::max<size_t>(batches_ * rows_, 4));
     offsets_ = rt.alloc(batches_ * blocks_ * sizeof(uint32_t));
     totals_ = rt.alloc(batches_ * sizeof(uint32_t));
-    open_ = rt.alloc(std::max<size_t>(rows_, 4));
+    open_ = rt.alloc(4);  // stands in for a null open-ray buffer (unread)
     // Unused until a grid is uploaded, but every kernel argument needs a buffer.
     for (Buffer* b : {&occupied_, &cell_offset_, &res_, &bound_, &scale_}) *b = rt.alloc(std::max<size_t>(batches_, 1) * 4);
   }

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "nova/graph.hpp"
+#include "nova/runtime.hpp"
 
 namespace nova {
 
@@ -51,21 +52,26 @@ struct OccupancyGrid {
   double occupied_fraction() const;
 };
 
+// Early ray termination's part of a packing (view_renderer.cpp): with samples_per_ray S > 0
+// the rows of every batch are ray-major (row m is sample m % S of ray m / S) and a row
+// survives only if first <= m % S < end and its ray is open, open_rays[m / S] != 0: one byte
+// per ray on the device, written by the renderer's termination kernels (null: every ray
+// open). S = 0 applies no such rule.
+struct SampleRange {
+  size_t samples_per_ray = 0, first = 0, end = 0;
+  cl_mem open_rays = nullptr;  // borrowed from the renderer
+  size_t open_rays_count = 0;  // rays it holds a flag for
+};
+
 // What a pack op tests its samples against: one grid per NeRF and, per batch of the packed
-// positions, which grid. The owner may change both between runs (a renderer placing other
-// objects); `enabled` false (or no grids) keeps every sample the grids would drop.
-//
-// On top of the grids, a pass of early ray termination (view_renderer.cpp) keeps only a
-// range of sample indices of the rays still open: with `samples_per_ray` S > 0 the rows of
-// every batch are ray-major (row m is sample m % S of ray m / S) and a row survives only if
-// first_sample <= m % S < end_sample and open_rays[m / S] != 0 (an empty open_rays: every
-// ray is open). S = 0 applies no such rule.
+// positions, which grid, and a sample range. The owner may change all of them between runs
+// (a renderer placing other objects, a termination pass); `enabled` false (or no grids)
+// keeps every sample the grids would drop.
 struct PackSelect {
   std::shared_ptr<const std::vector<OccupancyGrid>> grids;
   std::vector<int> grid_of_batch;
   bool enabled = true;
-  size_t samples_per_ray = 0, first_sample = 0, end_sample = 0;
-  std::vector<uint8_t> open_rays;
+  SampleRange range;
   // Written by the pack op on every run: samples kept over all batches, and samples tested.
   size_t kept = 0, tested = 0;
 };
