@@ -176,26 +176,9 @@ ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeom
   for (const auto& a : checkpoint.arrays)
     if (a.name.rfind(kObjectPrefix, 0) == 0) has_objects_ = true;
   if (config.occupancy) {
-    auto grids = std::make_shared<std::vector<OccupancyGrid>>();
-    for (int k = 0; k <= geometry.num_objects; ++k) {
-      const std::string name = occupancy_array_name(k);
-      const auto it = std::find_if(checkpoint.arrays.begin(), checkpoint.arrays.end(),
-                                   [&](const CheckpointArray& a) { return a.name == name; });
-      if (it == checkpoint.arrays.end()) break;
-      if (it->shape.size() != 3 || it->shape[0] != it->shape[1] || it->shape[1] != it->shape[2])
-        throw Error("checkpoint array '" + name + "' is not a cubic occupancy grid");
-      OccupancyGrid g(static_cast<int>(it->shape[0]), scene_field(config.field, geometry).hash.bound,
-                      config.occupancy_alpha);
-      g.density = it->values;
-      g.refresh();
-      grids->push_back(std::move(g));
-    }
-    // A pretraining checkpoint has the static grid alone: objects then keep every sample.
-    if (!grids->empty()) {
-      while (static_cast<int>(grids->size()) <= geometry.num_objects)
-        grids->emplace_back(1, (*grids)[0].bound, config.occupancy_alpha);
-      grids_ = saved_grids_ = grids;
-    }
+    saved_ = OccupancyEstimator::from_checkpoint(checkpoint, geometry.num_objects,
+                                                 scene_field(config.field, geometry).hash.bound, config.occupancy_alpha);
+    if (saved_) grids_ = saved_grids_ = saved_->grids();
   }
   const long rows = std::max<long>(config.samples, (1L << 24) / std::max(64, config.field.width));
   chunk_rays_ = chunk_rays > 0 ? chunk_rays : static_cast<int>(std::max<long>(1, rows / config.samples));

@@ -62,12 +62,12 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   regions_.reserve(scene.frames.size());
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
   if (config_.occupancy) {
-    grids_ = std::make_shared<std::vector<OccupancyGrid>>(
-        make_occupancy_grids(geometry_.num_objects, config_.occupancy_res,
-                             scene_field(config_.field, geometry_).hash.bound, config_.occupancy_alpha));
+    occupancy_ = std::make_unique<OccupancyEstimator>(geometry_.num_objects, config_.occupancy_res,
+                                                      scene_field(config_.field, geometry_).hash.bound,
+                                                      config_.occupancy_alpha);
     std::vector<double> times;
     for (const Frame& f : scene.frames) times.push_back(f.time);
-    occupancy_ = std::make_unique<OccupancyUpdater>(rt_, config_.field, geometry_, times);
+    occupancy_->enable_updates(rt_, config_.field, geometry_, times, {config_.occupancy_warmup, config_.occupancy_every});
   }
   write_text_atomic(run_dir_ + "/" + kConfigFile,
                     format_config(config_, {"# the scene this run trained on", "scene = " + scene.source}));
@@ -106,7 +106,7 @@ void Trainer::ensure_phase() {
   graph_ = std::move(g);
   exec_ = std::move(e);
   for (auto& pack : {graph_->pack_static, graph_->pack_objects})
-    if (pack) pack->grids = grids_;
+    if (pack) pack->grids = occupancy_ ? occupancy_->grids() : nullptr;
   adam_ = std::make_unique<Adam>(rt_, exec_->parameter_floats());
   graph_joint_ = joint;
 }
@@ -209,7 +209,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     p.augmented = augmented;
     p.terms.clear();
     for (auto& [name, t] : graph_->terms) p.terms.emplace_back(name, exec_->get(t).at(0));
-    if (grids_) {
+    if (occupancy_) {
       size_t kept = 0, tested = 0;
       for (auto& pack : {graph_->pack_static, graph_->pack_objects})
         if (pack) {
@@ -217,25 +217,16 @@ void Trainer::train_step(bool log, TrainProgress& p) {
           tested += pack->tested;
         }
       p.kept = tested ? static_cast<double>(kept) / static_cast<double>(tested) : 1.0;
-      p.occupied.clear();
-      for (const OccupancyGrid& g : *grids_) p.occupied.push_back(g.occupied_fraction());
+      p.occupied = occupancy_->occupied_fractions();
     }
     const double m = exec_->get(graph_->psnr_mse).at(0);
     p.psnr = m > 0 ? -10.0 * std::log10(m) : 99.0;
   }
 }
 
-// nerfacc's schedule: nothing is skipped during a phase's warm-up, then every cell is probed
-// once and a random 1/16 of them every occupancy_every steps. Pretraining keeps only the
-// static grid current (the object NeRFs are untrained); the joint phase all of them.
+// The grids follow the phase: occupancy_estimator.hpp has the schedule.
 void Trainer::maybe_update_occupancy(long phase_step) {
-  const TrainConfig& c = config_;
-  if (!occupancy_ || phase_step < c.occupancy_warmup) return;
-  const long since = phase_step - c.occupancy_warmup;
-  if (since % c.occupancy_every != 0) return;
-  // Its own generator, seeded by the step: resume restores the grids, not another stream.
-  std::mt19937 rng(c.seed * 2654435761u + static_cast<unsigned>(step_));
-  occupancy_->update(*exec_, *grids_, graph_joint_, since == 0, rng);
+  if (occupancy_) occupancy_->maybe_update(*exec_, phase_step, graph_joint_, config_.seed, step_);
 }
 
 void Trainer::run(const std::function<void(const TrainProgress&)>& progress, long until_step) {
@@ -308,12 +299,7 @@ Checkpoint Trainer::checkpoint() {
   const size_t n = adam_->count();
   ck.arrays.push_back({"adam.m", {n}, rt_.download_floats(adam_->first_moment(), n)});
   ck.arrays.push_back({"adam.v", {n}, rt_.download_floats(adam_->second_moment(), n)});
-  if (grids_)
-    for (size_t k = 0; k < grids_->size(); ++k) {
-      const OccupancyGrid& g = (*grids_)[k];
-      const size_t r = static_cast<size_t>(g.resolution);
-      ck.arrays.push_back({occupancy_array_name(static_cast<int>(k)), {r, r, r}, g.density});
-    }
+  if (occupancy_) occupancy_->save(ck);
   return ck;
 }
 
@@ -352,16 +338,13 @@ void Trainer::resume() {
   rt_.upload(adam_->second_moment(), v.values.data(), v.values.size() * sizeof(float));
   adam_->set_steps(std::stol(ck.get("adam_steps")));
   set_rng_state(rng_, ck.get("rng"));
-  if (grids_)
-    for (size_t k = 0; k < grids_->size(); ++k) {
-      OccupancyGrid& g = (*grids_)[k];
-      const CheckpointArray& a = ck.array(occupancy_array_name(static_cast<int>(k)));
-      if (a.values.size() != g.density.size())
-        throw mismatch("occupancy grid " + std::to_string(k) + " has " + std::to_string(a.values.size()) +
-                       " cells, configured " + std::to_string(g.density.size()));
-      g.density = a.values;
-      g.refresh();
+  if (occupancy_) {
+    try {
+      occupancy_->restore(ck);
+    } catch (const Error& e) {
+      throw mismatch(e.what());
     }
+  }
   truncate_metrics(run_dir_ + "/" + kMetricsFile, step_);
 }
 

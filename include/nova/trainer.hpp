@@ -13,7 +13,7 @@
 #include "nova/checkpoint.hpp"
 #include "nova/executor.hpp"
 #include "nova/nova_graphs.hpp"
-#include "nova/occupancy_updater.hpp"
+#include "nova/occupancy_estimator.hpp"
 #include "nova/optim.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene.hpp"
@@ -90,8 +90,7 @@ class Trainer {
   bool profile_ = false;
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
   // Empty-space skipping (config_.occupancy): the grids of the static and object NeRFs.
-  std::shared_ptr<std::vector<OccupancyGrid>> grids_;
-  std::unique_ptr<OccupancyUpdater> occupancy_;
+  std::unique_ptr<OccupancyEstimator> occupancy_;  // with TrainConfig::occupancy
 };
 
 }  // namespace nova

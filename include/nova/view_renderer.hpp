@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "nova/checkpoint.hpp"
-#include "nova/occupancy.hpp"
+#include "nova/occupancy_estimator.hpp"
 #include "nova/compose_spec.hpp"
 #include "nova/object_centre.hpp"
 #include "nova/executor.hpp"
@@ -149,7 +149,8 @@ class ViewRenderer {
   const Checkpoint& checkpoint_;
   bool has_objects_ = false;
   int chunk_rays_ = 0;
-  std::shared_ptr<std::vector<OccupancyGrid>> grids_, saved_grids_;
+  std::unique_ptr<OccupancyEstimator> saved_;  // the checkpoint's grids (null: none)
+  std::shared_ptr<const std::vector<OccupancyGrid>> grids_, saved_grids_;  // grids_: null while skipping is off
   EarlyTermination termination_;
   RenderStats stats_;
   std::map<std::tuple<bool, int, int, bool, bool>, std::unique_ptr<Cached>> graphs_;
