@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "cli/options.hpp"
+#include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
 #include "nova/evaluation.hpp"
 #include "nova/image_io.hpp"
@@ -92,14 +93,19 @@ int eval(const Args& args) {
   const DeviceInfo device = select_device(vm["device"].as<std::string>());
   Runtime rt(device, false);
   ViewRenderer renderer(rt, run.files.config, run.geometry, run.files.checkpoint);
+  RenderProgress progress;
+  renderer.set_progress([&](size_t done, size_t total) { progress(done, total); });
+  progress.start("view 1/" + std::to_string(views.size()));
   const BlendChoice blend = blend_choice(vm);
   const std::string pictures = run_dir + "/eval";
   std::filesystem::create_directories(pictures);
   const auto write = [&](size_t, const std::string& stem, const Image8& out) {
     write_png(pictures + "/" + stem + ".png", out);
+    progress.start(stem);
   };
   const auto write_and_count = [&](size_t i, const std::string& stem, const Image8& out) {
     write(i, stem, out);
+    progress.start("view " + std::to_string(i + 2) + "/" + std::to_string(views.size()));
     std::cerr << "\revaluated " << i + 1 << "/" << views.size() << std::flush;
   };
   const std::vector<Score> scores = score_views(renderer, scene.num_objects, views, blend.scene_views, write_and_count);

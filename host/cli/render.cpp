@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "cli/options.hpp"
+#include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
 #include "nova/compose_spec.hpp"
 #include "nova/image_io.hpp"
@@ -106,6 +107,8 @@ int render(const Args& args) {
   const DeviceInfo device = select_device(vm["device"].as<std::string>());
   Runtime rt(device, false);
   ViewRenderer renderer(rt, run.files.config, run.geometry, run.files.checkpoint);
+  RenderProgress progress;
+  renderer.set_progress([&](size_t done, size_t total) { progress(done, total); });
   StagedFolder out(vm["out"].as<std::string>(), vm["force"].as<bool>());
   std::vector<Image8> frames;
   size_t views = 0;
@@ -124,6 +127,7 @@ int render(const Args& args) {
                     << " has no density at t=" << i.time << "; it turns about the scene origin\n";
         req.instances.push_back(placed_instance(i, pv.pivot));
       }
+      progress.start(t.name);
       frames.push_back(write_view(renderer.render(req), out.path(), t.name, masks));
       std::cerr << "rendered " << t.name << " (" << t.instances.size() << " instances)\n";
       ++views;
@@ -142,6 +146,7 @@ int render(const Args& args) {
       req.camera = camera;
       req.hard_blend = blend.scene_views;
       req.instances = scene_instances(scene.num_objects, times[i]);
+      progress.start("view " + std::to_string(i + 1) + "/" + std::to_string(times.size()));
       frames.push_back(write_view(renderer.render(req), out.path(), frame_name(i).substr(0, 3), masks));
       std::cerr << "\rrendered " << i + 1 << "/" << times.size() << std::flush;
       ++views;

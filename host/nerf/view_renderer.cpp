@@ -376,6 +376,7 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
       img.acc[p] = acc[r];
       for (size_t m = 0; m < static_cast<size_t>(N); ++m) img.masks[m][p] = mask[m * R + r];
     }
+    if (progress_) progress_(first + n, P);
     stats_.terminated += stopped;
     if (split) pays = static_cast<double>(stopped) >= static_cast<double>(termination_.pays_from) * static_cast<double>(n);
   }

@@ -4,6 +4,7 @@
 // blending. Rays run in chunks through cached view graphs (one per NeRF layout), skipping
 // empty space (occupancy grids) and stopping early (EarlyTermination).
 #include <array>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -115,6 +116,9 @@ class ViewRenderer {
   int chunk_rays() const { return chunk_rays_; }
   // Whether renders skip empty space (the run trained with occupancy grids and saved them).
   bool skips_empty_space() const { return grids_ != nullptr; }
+  // Called after every chunk of a render with the view's rays done and in all (for progress
+  // lines of long renders); empty: none.
+  void set_progress(std::function<void(size_t done, size_t total)> progress) { progress_ = std::move(progress); }
   // Renders every sample even when the run has occupancy grids (the reference for tests).
   void set_skip_empty_space(bool on);
   // On by default; off renders every sample of every ray (the reference for tests).
@@ -149,6 +153,7 @@ class ViewRenderer {
   const Checkpoint& checkpoint_;
   bool has_objects_ = false;
   int chunk_rays_ = 0;
+  std::function<void(size_t, size_t)> progress_;
   std::unique_ptr<OccupancyEstimator> saved_;  // the checkpoint's grids (null: none)
   std::shared_ptr<const std::vector<OccupancyGrid>> grids_, saved_grids_;  // grids_: null while skipping is off
   EarlyTermination termination_;
