@@ -106,7 +106,18 @@ std::vector<Image8> read_mask_folder(const path& folder, const path& dir, size_t
     throw Error(folder.string() + ": " + std::to_string(files.size()) + " masks but " +
                 std::to_string(n) + " images (mask count must match the frames)");
   std::vector<Image8> masks;
-  for (const auto& f : files) masks.push_back(resize_nearest(read_mask(f.string()), w, h));
+  for (const auto& f : files) {
+    const Image8 m = read_mask(f.string());
+    // Another resolution of the same picture is resized, as DynamicNeRF does; another aspect
+    // ratio means a mask of another video or crop, which stretching would misplace.
+    const double height_at_frame_width = static_cast<double>(m.height) * w / std::max(1, m.width);
+    if (std::abs(height_at_frame_width - h) > 1.0 + 0.01 * h)
+      throw Error(f.string() + ": the mask is " + std::to_string(m.width) + "x" + std::to_string(m.height) +
+                  ", its frame " + std::to_string(w) + "x" + std::to_string(h) +
+                  ": another aspect ratio (a mask of another video or crop?); a mask may differ from its "
+                  "frame in resolution only");
+    masks.push_back(resize_nearest(m, w, h));
+  }
   (void)dir;
   return masks;
 }
