@@ -1,0 +1,45 @@
+# The installed package works for a program outside nova's tree (examples/CMakeLists.txt runs
+# this as the CTest test install_package):
+#   1. cmake --install BUILD_DIR --prefix WORK_DIR/prefix
+#   2. examples/ configured on its own with CMAKE_PREFIX_PATH=prefix (find_package(nova CONFIG)),
+#      built, and embed_core run
+#   3. embed_core.cpp compiled with `pkg-config --cflags --libs nova` against the prefix, and run
+# Any failing step stops the test with its output.
+file(REMOVE_RECURSE ${WORK_DIR})
+set(prefix ${WORK_DIR}/prefix)
+
+function(step what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
+  endif()
+  message(STATUS "${what}: ok")
+endfunction()
+
+step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+foreach(f lib/cmake/nova/nova-config.cmake lib/pkgconfig/nova.pc include/nova/runtime.hpp lib/libnova_core.a)
+  if(NOT EXISTS ${prefix}/${f})
+    message(FATAL_ERROR "the install has no ${f}")
+  endif()
+endforeach()
+
+step("configure examples against the prefix" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples -B ${WORK_DIR}/examples
+     -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=Release)
+step("build examples" ${CMAKE_COMMAND} --build ${WORK_DIR}/examples)
+step("run embed_core (CMake package)" ${WORK_DIR}/examples/embed_core)
+
+find_program(PKG_CONFIG pkg-config)
+if(NOT PKG_CONFIG)
+  message(STATUS "no pkg-config on this machine: the pkg-config build is left out")
+  return()
+endif()
+set(ENV{PKG_CONFIG_PATH} ${prefix}/lib/pkgconfig)
+execute_process(COMMAND ${PKG_CONFIG} --cflags --libs nova RESULT_VARIABLE rc OUTPUT_VARIABLE flags
+                ERROR_VARIABLE err OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "pkg-config nova failed: ${err}")
+endif()
+separate_arguments(flags UNIX_COMMAND "${flags}")
+step("compile embed_core with pkg-config" ${CXX} -std=c++20 -O2 ${SOURCE_DIR}/examples/embed_core.cpp ${flags}
+     -o ${WORK_DIR}/embed_core_pc)
+step("run embed_core (pkg-config)" ${WORK_DIR}/embed_core_pc)
