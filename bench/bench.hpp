@@ -17,6 +17,7 @@ int tradeoff(const Args& args);  // needs nova_io (scenes, metrics, the plot)
 int view(const Args& args);      // needs nova_io (the run's scene)
 int accuracy(const Args& args);  // needs nova_io (scenes, metrics, pictures)
 int step(const Args& args);      // needs nova_io (the scene)
+int devices(const Args& args);   // needs nova_io (the scene, its evaluation, the plot)
 #endif
 
 struct Benchmark {

@@ -16,6 +16,7 @@ const std::vector<Benchmark>& benchmarks() {
 #ifdef NOVA_BENCH_IO
       {"tradeoff", "trains a scene under several settings: PSNR against training time (CSV, PNG, speedup)", tradeoff},
       {"accuracy", "trains and evaluates a list of scenes (sets dev, test, real) with one configuration: PSNR / SSIM / time per scene and set (table, CSV, JSON, PNG)", accuracy},
+      {"devices", "every OpenCL device side by side: MLP speed and error against float64, a short training's speed and PSNR (table, CSV, JSON, PNG)", devices},
       {"step", "training steps per preset, phase and object count: s/step, rays/s, device memory, peak RSS, per-op tables", step},
       {"view", "renders a trained run's views with early ray termination on and off: time ratio, evaluations saved", view},
 #endif
