@@ -74,6 +74,20 @@ inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res
   return dense ? index : (index & (table_size - 1));
 }
 
+// The table rows and weights of the 2^D vertices around point r of network b at level l.
+inline void hg_corners(__global const float* positions, uint b, uint rows, uint r, uint l,
+                       __constant float* res, __constant float* res_t, uint table_size,
+                       float inv_bound, float inv_bound_t, uint* vertex, float* weight) {
+  const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
+  const int dense = hg_dense(resolution, resolution_t, table_size);
+  uint cell[HG_DIMS];
+  float frac[HG_DIMS];
+  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
+           res_t[l], cell, frac);
+  for (uint c = 0; c < HG_CORNERS; ++c)
+    vertex[c] = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &weight[c]);
+}
+
 // One work-item per (network, level, row), rows fastest.
 __kernel void hashgrid_forward(__global const float* positions, __global const float* table,
                                __constant float* res, __constant float* res_t,
@@ -82,21 +96,14 @@ __kernel void hashgrid_forward(__global const float* positions, __global const f
   const uint i = get_global_id(0);
   if (i >= nets * levels * rows) return;
   const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
-  const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
-  const int dense = hg_dense(resolution, resolution_t, table_size);
-  uint cell[HG_DIMS];
-  float frac[HG_DIMS];
-  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
-           res_t[l], cell, frac);
-
+  uint v[HG_CORNERS];
+  float w[HG_CORNERS];
+  hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, inv_bound_t, v, w);
   float acc[HG_FEATURES];
   for (uint f = 0; f < HG_FEATURES; ++f) acc[f] = 0.0f;
   __global const float* t = table + ((size_t)b * levels + l) * table_size * HG_FEATURES;
-  for (uint c = 0; c < HG_CORNERS; ++c) {
-    float w;
-    const uint v = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &w);
-    for (uint f = 0; f < HG_FEATURES; ++f) acc[f] += w * t[(size_t)v * HG_FEATURES + f];
-  }
+  for (uint c = 0; c < HG_CORNERS; ++c)
+    for (uint f = 0; f < HG_FEATURES; ++f) acc[f] += w[c] * t[(size_t)v[c] * HG_FEATURES + f];
   __global float* o = out + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
   for (uint f = 0; f < HG_FEATURES; ++f) o[f] = acc[f];
 }
@@ -110,23 +117,17 @@ __kernel void hashgrid_backward(__global const float* positions, __global const 
   const uint i = get_global_id(0);
   if (i >= nets * levels) return;
   const uint l = i % levels, b = i / levels;
-  const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
-  const int dense = hg_dense(resolution, resolution_t, table_size);
   __global float* g = dtable + ((size_t)b * levels + l) * table_size * HG_FEATURES;
   if (!accumulate)
     for (size_t k = 0; k < (size_t)table_size * HG_FEATURES; ++k) g[k] = 0.0f;
 
   for (uint r = 0; r < rows; ++r) {
-    uint cell[HG_DIMS];
-    float frac[HG_DIMS];
-    hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
-             res_t[l], cell, frac);
+    uint v[HG_CORNERS];
+    float w[HG_CORNERS];
+    hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, inv_bound_t, v, w);
     __global const float* dy = dout + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
-    for (uint c = 0; c < HG_CORNERS; ++c) {
-      float w;
-      const uint v = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &w);
-      for (uint f = 0; f < HG_FEATURES; ++f) g[(size_t)v * HG_FEATURES + f] += w * dy[f];
-    }
+    for (uint c = 0; c < HG_CORNERS; ++c)
+      for (uint f = 0; f < HG_FEATURES; ++f) g[(size_t)v[c] * HG_FEATURES + f] += w[c] * dy[f];
   }
 }
 
@@ -178,22 +179,16 @@ __kernel void hashgrid_backward_atomic(__global const float* positions, __global
   if (i >= nets * levels * rows) return;
   const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
   const int k = hg_fixed_exponent(absmax[0], rows);
-  const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
-  const int dense = hg_dense(resolution, resolution_t, table_size);
-  uint cell[HG_DIMS];
-  float frac[HG_DIMS];
-  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
-           res_t[l], cell, frac);
+  uint v[HG_CORNERS];
+  float w[HG_CORNERS];
+  hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, inv_bound_t, v, w);
   __global const float* dy = dout + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
   __global long* g = acc + ((size_t)b * levels + l) * table_size * HG_FEATURES;
-  for (uint c = 0; c < HG_CORNERS; ++c) {
-    float w;
-    const uint v = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &w);
+  for (uint c = 0; c < HG_CORNERS; ++c)
     for (uint f = 0; f < HG_FEATURES; ++f) {
-      const long q = convert_long_rte(ldexp(w * dy[f], k));
-      if (q != 0) atom_add(&g[(size_t)v * HG_FEATURES + f], q);
+      const long q = convert_long_rte(ldexp(w[c] * dy[f], k));
+      if (q != 0) atom_add(&g[(size_t)v[c] * HG_FEATURES + f], q);
     }
-  }
 }
 
 // dtable[e] (+)= acc[e] 2^-k, for every entry of every network and level.

@@ -1,4 +1,7 @@
 #pragma once
+#include <sys/wait.h>
+
+#include <cstdlib>
 // Helpers for the data-layer suites: unique temporary folders under /tmp and a cached tiny
 // synthetic scene that tests copy and then damage.
 #include <boost/test/unit_test.hpp>
@@ -64,6 +67,21 @@ inline void write_all(const fs::path& p, const std::string& bytes) {
   std::ofstream out(p, std::ios::binary | std::ios::trunc);
   out << bytes;
 }
+
+// A program of this build run as a user runs it: `program` is a file name in the build folder
+// (nova, nova-bench), `args` its arguments; stdout and stderr go to files in `dir`.
+struct CommandResult {
+  int code = -1;  // exit code; -1 when it did not exit (a signal)
+  std::string out, err;
+};
+inline CommandResult run_built(const std::string& program, const std::string& args, const TempDir& dir,
+                               const std::string& env = "") {
+  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
+  const std::string cmd = env + " " + std::string(NOVA_BINARY_DIR) + "/" + program + " " + args + " >" + out + " 2>" + err;
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(out), read_all(err)};
+}
+inline bool built(const std::string& program) { return fs::exists(fs::path(NOVA_BINARY_DIR) / program); }
 
 // Raw .npy bytes with any descr/shape text, for malformed-input tests.
 inline std::string npy_bytes(const std::string& descr, const std::string& shape,

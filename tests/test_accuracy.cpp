@@ -42,17 +42,9 @@ SceneResult result(const std::string& name, const std::string& set, double cam0,
   return r;
 }
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
+using Result = CommandResult;
 
-Result bench_cli(const std::string& args, const TempDir& dir) {
-  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova-bench accuracy " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(out), read_all(err)};
-}
+Result bench_cli(const std::string& args, const TempDir& dir) { return run_built("nova-bench", "accuracy " + args, dir); }
 
 bool has_bench() { return fs::exists(fs::path(NOVA_BINARY_DIR) / "nova-bench"); }
 

@@ -14,20 +14,11 @@
 namespace nova::test {
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-Result run_devices(const std::string& args, const TempDir& dir) {
-  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-  const std::string cmd = "POCL_DEVICES='pthread basic' " + std::string(NOVA_BINARY_DIR) + "/nova-bench devices " +
-                          args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(out), read_all(err)};
+CommandResult run_devices(const std::string& args, const TempDir& dir) {
+  return run_built("nova-bench", "devices " + args, dir, "POCL_DEVICES='pthread basic'");
 }
 
-bool has_bench() { return fs::exists(fs::path(NOVA_BINARY_DIR) / "nova-bench"); }
+bool has_bench() { return built("nova-bench"); }
 
 // The CSV's rows as column -> value.
 std::vector<std::map<std::string, std::string>> csv_rows(const fs::path& p) {
@@ -56,7 +47,7 @@ BOOST_AUTO_TEST_SUITE(bench_devices)
 
 BOOST_AUTO_TEST_CASE(two_pocl_devices_side_by_side, *boost::unit_test::precondition([](auto) { return has_bench(); })) {
   TempDir dir("bench-devices");
-  const Result r = run_devices("--scene " + cached_tiny_scene().string() + kSmall + " --out " + (dir / "out").string(), dir);
+  const CommandResult r = run_devices("--scene " + cached_tiny_scene().string() + kSmall + " --out " + (dir / "out").string(), dir);
   BOOST_TEST_REQUIRE(r.code == 0, r.err << r.out);
   for (const char* f : {"devices.md", "devices.csv", "devices.json", "devices.png"}) BOOST_TEST(fs::exists(dir / "out" / f), f);
   const auto rows = csv_rows(dir / "out" / "devices.csv");
@@ -76,7 +67,7 @@ BOOST_AUTO_TEST_CASE(two_pocl_devices_side_by_side, *boost::unit_test::precondit
 BOOST_AUTO_TEST_CASE(a_failing_device_is_a_row, *boost::unit_test::precondition([](auto) { return has_bench(); })) {
   TempDir dir("bench-devices-fail");
   // 2^27 rows of 63 inputs: more than any one buffer may hold (and than 32-bit indexing).
-  const Result r = run_devices("--devices 0:0 --scene " + cached_tiny_scene().string() + kSmall +
+  const CommandResult r = run_devices("--devices 0:0 --scene " + cached_tiny_scene().string() + kSmall +
                                    " --batch 134217728 --out " + (dir / "out").string(),
                                dir);
   BOOST_TEST(r.code == 1, r.err);
@@ -90,7 +81,7 @@ BOOST_AUTO_TEST_CASE(bad_options_are_refused, *boost::unit_test::precondition([]
   TempDir dir("bench-devices-bad");
   for (const std::string& args : {std::string("--batch 0"), std::string("--devices 7:7"),
                                  "--scene " + (dir / "missing").string()}) {
-    const Result r = run_devices(args + " --out " + (dir / "out").string(), dir);
+    const CommandResult r = run_devices(args + " --out " + (dir / "out").string(), dir);
     BOOST_TEST(r.code == 2, args << ": " << r.err);
     BOOST_TEST(!fs::exists(dir / "out"), args);
   }

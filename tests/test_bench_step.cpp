@@ -11,19 +11,11 @@
 namespace nova::test {
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-Result run_bench_step(const std::string& args, const TempDir& dir) {
-  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova-bench step " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(out), read_all(err)};
+CommandResult run_bench_step(const std::string& args, const TempDir& dir) {
+  return run_built("nova-bench", "step " + args, dir);
 }
 
-bool has_bench() { return fs::exists(fs::path(NOVA_BINARY_DIR) / "nova-bench"); }
+bool has_bench() { return built("nova-bench"); }
 
 }  // namespace
 
@@ -32,7 +24,7 @@ BOOST_AUTO_TEST_SUITE(bench_step)
 BOOST_AUTO_TEST_CASE(rows_for_each_phase_and_object_count, *boost::unit_test::precondition([](auto) { return has_bench(); })) {
   TempDir dir("bench-step");
   const fs::path csv = dir / "step.csv";
-  const Result r = run_bench_step("--scene " + cached_tiny_scene().string() +
+  const CommandResult r = run_bench_step("--scene " + cached_tiny_scene().string() +
                                   " --presets quick --objects 1,2 --steps 1 --warmup 1 --profile-steps 1 --out " +
                                   csv.string(),
                               dir);
@@ -69,7 +61,7 @@ BOOST_AUTO_TEST_CASE(bad_inputs_are_refused, *boost::unit_test::precondition([](
            {scene + " --steps 0", "--steps"},
            {" --scene " + (dir / "missing").string(), "missing"},
            {"", "--scene"}}) {
-    const Result r = run_bench_step(args + " --out " + csv.string(), dir);
+    const CommandResult r = run_bench_step(args + " --out " + csv.string(), dir);
     BOOST_TEST(r.code == 2, args);
     BOOST_TEST(r.err.find(names) != std::string::npos, args << ": " << r.err);
     BOOST_TEST(!fs::exists(csv), args);

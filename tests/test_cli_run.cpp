@@ -10,21 +10,9 @@
 namespace nova::test {
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string err, out;
-};
+using Result = CommandResult;
 
-Result nova_cli(const std::string& args, const TempDir& dir) {
-  const std::string err = (dir / "stderr.txt").string(), out = (dir / "stdout.txt").string();
-  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = read_all(err);
-  r.out = read_all(out);
-  return r;
-}
+Result nova_cli(const std::string& args, const TempDir& dir) { return run_built("nova", args, dir); }
 
 // The smallest networks (small hash tables: quick's 2^16 x 16 levels would make every
 // checkpoint 75 MB) and schedule that exercise every phase (pretraining, joint, augmented

@@ -32,13 +32,13 @@ using nova::test::random_floats;
 
 namespace {
 
-// Float64 reference of one network: positions [M, D], table [L, T, F] -> [M, L * F].
-std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, size_t dims,
-                                   const std::vector<float>& table, const HashGridConfig& c) {
+// Every vertex a float64 evaluation of the encoding reads: visit(row, level, table row,
+// weight) for each corner of each level of each of `rows` positions [M, D] (one network).
+template <class Visit>
+void for_each_vertex(const std::vector<float>& pos, size_t rows, size_t dims, const HashGridConfig& c, Visit visit) {
   const std::vector<float> res = hash_grid_resolutions(c), res_t = hash_grid_time_resolutions(c);
   const uint64_t T = uint64_t{1} << c.log2_size;
   const uint32_t primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
-  std::vector<double> out(rows * c.levels * c.features, 0.0);
   for (size_t r = 0; r < rows; ++r) {
     for (int l = 0; l < c.levels; ++l) {
       // The 4th coordinate is time: on [-1, 1] with its own cell count.
@@ -70,12 +70,21 @@ std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, s
           stride *= static_cast<uint64_t>(R[d]) + 1;
           h ^= v * primes[d];  // uint32 wrap-around, as the kernel
         }
-        const uint64_t row = dense ? index : (h & (T - 1));
-        for (int f = 0; f < c.features; ++f)
-          out[(r * c.levels + l) * c.features + f] += w * table[(l * T + row) * c.features + f];
+        visit(r, l, dense ? index : (h & (T - 1)), w);
       }
     }
   }
+}
+
+// Float64 reference of one network: positions [M, D], table [L, T, F] -> [M, L * F].
+std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, size_t dims,
+                                   const std::vector<float>& table, const HashGridConfig& c) {
+  const uint64_t T = uint64_t{1} << c.log2_size;
+  std::vector<double> out(rows * c.levels * c.features, 0.0);
+  for_each_vertex(pos, rows, dims, c, [&](size_t r, int l, uint64_t row, double w) {
+    for (int f = 0; f < c.features; ++f)
+      out[(r * c.levels + l) * c.features + f] += w * table[(l * T + row) * c.features + f];
+  });
   return out;
 }
 
@@ -253,41 +262,13 @@ BOOST_AUTO_TEST_CASE(table_gradient_matches_float64_sums) {
   // contribution w dy summed in float64.
   const auto y = hash_reference(pos, rows, dims, table, c);
   std::vector<double> ref(table.size(), 0.0);
-  {
-    const std::vector<float> res = hash_grid_resolutions(c);
-    const uint64_t T = uint64_t{1} << c.log2_size;
-    const uint32_t primes[3] = {1u, 2654435761u, 805459861u};
-    for (size_t r = 0; r < rows; ++r)
-      for (int l = 0; l < c.levels; ++l) {
-        const double R = res[l];
-        const bool dense = (R + 1) * (R + 1) * (R + 1) <= static_cast<double>(T);
-        uint32_t cell[3];
-        double frac[3];
-        for (size_t d = 0; d < dims; ++d) {
-          const double u = std::clamp(0.5 * (pos[r * dims + d] + 1.0), 0.0, 1.0) * R;
-          const double f = std::min(std::floor(u), R - 1);
-          cell[d] = static_cast<uint32_t>(f);
-          frac[d] = u - f;
-        }
-        for (uint32_t corner = 0; corner < 8; ++corner) {
-          double w = 1;
-          uint64_t index = 0, stride = 1;
-          uint32_t h = 0;
-          for (size_t d = 0; d < dims; ++d) {
-            const uint32_t bit = (corner >> d) & 1u, v = cell[d] + bit;
-            w *= bit ? frac[d] : 1 - frac[d];
-            index += v * stride;
-            stride *= static_cast<uint64_t>(R) + 1;
-            h ^= v * primes[d];
-          }
-          const uint64_t row = dense ? index : (h & (T - 1));
-          for (int f = 0; f < c.features; ++f) {
-            const size_t o = (r * c.levels + l) * c.features + f;
-            ref[(l * T + row) * c.features + f] += w * 2.0 * (y[o] - target[o]) / double(rows * outs);
-          }
-        }
-      }
-  }
+  const uint64_t T = uint64_t{1} << c.log2_size;
+  for_each_vertex(pos, rows, dims, c, [&](size_t r, int l, uint64_t row, double w) {
+    for (int f = 0; f < c.features; ++f) {
+      const size_t o = (r * c.levels + l) * c.features + f;
+      ref[(l * T + row) * c.features + f] += w * 2.0 * (y[o] - target[o]) / double(rows * outs);
+    }
+  });
   double scale = 0;
   for (double v : ref) scale = std::max(scale, std::fabs(v));
   std::vector<float> tiny_table(table), tiny_target(target);

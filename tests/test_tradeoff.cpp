@@ -32,17 +32,9 @@ std::string error_of(F&& f) {
   return "";
 }
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
+using Result = CommandResult;
 
-Result bench_cli(const std::string& args, const TempDir& dir) {
-  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-  const std::string cmd = std::string(NOVA_BINARY_DIR) + "/nova-bench tradeoff " + args + " >" + out + " 2>" + err;
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_all(out), read_all(err)};
-}
+Result bench_cli(const std::string& args, const TempDir& dir) { return run_built("nova-bench", "tradeoff " + args, dir); }
 
 bool has_bench() { return fs::exists(fs::path(NOVA_BINARY_DIR) / "nova-bench"); }
 
