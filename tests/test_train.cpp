@@ -277,7 +277,7 @@ const GridRun& grid_run() {
     // quick's two object priors make this 250-step model one where they cost more (skipped
     // against full: 25.8 dB; the static NeRF behind the objects keeps the haze of its
     // initialisation, which objects still half transparent let through and the grids drop),
-    // so the model is trained without them (README, "Known issues").
+    // so the model is trained without them (docs/known-issues.md).
     c.static_background_only = false;
     c.w_free_space = 0.0f;
     // With the box that holds every training ray (hash-ndc-box-from-rays) this 250-step model

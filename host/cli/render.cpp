@@ -70,7 +70,7 @@ int render(const Args& args) {
       "camera", po::value<int>()->default_value(0), "training camera (frame index) to render from")(
       "pose", po::value<std::string>(), "12 numbers: a camera-to-world 3x4 matrix (scene coordinates) instead of --camera")(
       "time", po::value<double>(), "object time in [-1, 1] (frame i of N has 2i/N - 1); default: every frame's time")(
-      "compose", po::value<std::string>(), "composition spec: render each of its targets (see README)")(
+      "compose", po::value<std::string>(), "composition spec: render each of its targets (see docs/rendering.md)")(
       "video", po::bool_switch(), "also write video.mp4 of the colour frames")(
       "fps", po::value<double>()->default_value(10.0), "frame rate of the video")(
       "no-masks", po::bool_switch(), "skip the per-NeRF mask PNGs")(

@@ -171,7 +171,7 @@ Tensor with_free_space_term(StepGraph& s, const TrainConfig& c, const RayGeometr
 
 // Adds w_distortion * distortion_loss of the object NeRFs (NeRF 0 is the static one), each
 // on its mask's rays, to `loss`. On the static NeRF the term cost 2 dB of camera-0 PSNR on
-// the default synthetic scene (README, "Accuracy"), so it is not applied there.
+// the default synthetic scene (docs/accuracy.md), so it is not applied there.
 Tensor with_distortion_term(StepGraph& s, const TrainConfig& c, Tensor raw, const Samples& smp,
                             Tensor masks, Tensor loss) {
   if (c.w_distortion <= 0.0f) return loss;

@@ -119,7 +119,7 @@ HashBackward hash_backward_choice(const DeviceInfo& d) {
   if (!want.empty() && want != "auto")
     throw Error("NOVA_HASH_BACKWARD='" + want + "': expected auto, ordered or atomic", kExitUsage);
   // A CPU's few cores are busy with the networks and levels of the ordered backward, which
-  // measured faster there (README, "Performance"); a GPU needs parallelism over rows.
+  // measured faster there (docs/performance.md); a GPU needs parallelism over rows.
   return d.int64_atomics && !(d.type & CL_DEVICE_TYPE_CPU) ? HashBackward::Atomic : HashBackward::Ordered;
 }
 

@@ -262,7 +262,7 @@ TrainConfig preset_config(const std::string& name) {
   TrainConfig c;  // the defaults are the reference
   if (name == "reference") {
     c.preset = "reference";
-    // The public reference code's conventions, item by item (README, "Loss conventions").
+    // The public reference code's conventions, item by item (docs/training.md, "Loss conventions").
     c.conventions = reference_conventions();
     c.weights.order = 0.1f;
     return c;
@@ -298,7 +298,7 @@ TrainConfig preset_config(const std::string& name) {
   // hash-collision noise seen from camera 0. On the default synthetic scene these took
   // camera-0 PSNR from 24.03 dB to 25.36 (time cells) and 27.18 (object grid); on
   // nvidia_balloon1 the object grid's finest level changed nothing at 240 or 480 pixels wide
-  // (18.61 / 17.86 dB against 18.59 / 17.82 at 512 cells; README, "Accuracy").
+  // (18.61 / 17.86 dB against 18.59 / 17.82 at 512 cells; docs/accuracy.md).
   c.field.hash_time_auto = true;
   c.field.object_max_resolution = 32;
   c.augment_start = 200;

@@ -101,7 +101,7 @@ struct NovelViewLossWeights {
 
 // How the terms are normalised and what the renderer gives them. The defaults are nova's
 // own conventions (the quick preset); reference_conventions() gives the public reference
-// code's (the reference preset). README, "Loss conventions".
+// code's (the reference preset). docs/training.md, "Loss conventions".
 struct LossConventions {
   // Mask loss: mse(M, masks) over all N R values (false), or mask_l1_loss (true).
   bool mask_l1 = false;

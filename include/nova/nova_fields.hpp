@@ -25,7 +25,7 @@ const char* encoding_name(Encoding e);  // "frequency", "hashgrid"
 // A time cell shared by about three neighbouring frames ties each object NeRF to three
 // viewpoints of a monocular video: on the default synthetic scene (24 frames) 8 cells gave
 // 25.36 dB camera-0 PSNR against 24.03 with a cell per frame and more at fine levels, on
-// nvidia_balloon1 (12 frames, novel times) 4 cells 18.59 dB against 17.01 (README, "Accuracy").
+// nvidia_balloon1 (12 frames, novel times) 4 cells 18.59 dB against 17.01 (docs/accuracy.md).
 inline constexpr double kFramesPerTimeCell = 3.0;
 
 struct FieldConfig {
@@ -43,7 +43,7 @@ struct FieldConfig {
   // 1, the reference camera's frustum, which clamps what moved cameras see beyond it (streaks
   // at the image edge). The box is a cube, so holding a wider x also coarsens y and z: on the
   // default synthetic scene and family test seeds 101 and 102 that cost 3.5, 2.8 and 7.1 dB
-  // (README, "Accuracy"), so false is the default.
+  // (docs/accuracy.md), so false is the default.
   bool ndc_box_from_rays = false;
   // Finest cells per dimension of the object NeRFs' hash grid (0: hash.max_resolution). An
   // object is seen from one camera per time, so fine levels it cannot constrain fill with

@@ -33,7 +33,7 @@ struct TrainConfig {
   float augment_degrees = 20.0f;
   NovelViewLossWeights weights;
   // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
-  // public reference code's (reference); README, "Loss conventions".
+  // public reference code's (reference); docs/training.md, "Loss conventions".
   LossConventions conventions;
   // Depth up to scale and shift against the scene's disparity maps (disp/), in both phases,
   // as DynamicNeRF (whose code NOVA builds on) does; off without disparity or with 0.

@@ -84,8 +84,8 @@ struct EarlyTermination {
   // passes. Per view, the first chunk is a probe (in passes); while the last probe stopped
   // fewer than `pays_from` of its rays, the next `probe_every` chunks run in one pass (the
   // render without termination, bit for bit where the run has grids), then another probe.
-  // 0.15: `nova-bench view` measured the break-even at 0.12-0.23 on 2 CPU cores (README,
-  // "Known issues"); 0: every chunk in passes.
+  // 0.15: `nova-bench view` measured the break-even at 0.12-0.23 on 2 CPU cores
+  // (docs/known-issues.md); 0: every chunk in passes.
   float pays_from = 0.15f;
   int probe_every = 4;
 };
