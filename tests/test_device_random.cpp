@@ -83,6 +83,26 @@ BOOST_AUTO_TEST_CASE(seed_stream_and_counter_each_change_the_draw) {
   }
 }
 
+// A slice (rows of 5 columns at offset 7 inside rows of 17: a rank's share of the rays) draws
+// exactly the values of those columns of the whole draw, bit for bit.
+BOOST_AUTO_TEST_CASE(a_slice_draws_what_the_whole_draws_there) {
+  for (bool normal : {false, true}) {
+    auto c = std::make_shared<DrawCounter>();
+    c->value = 42;
+    Graph g;
+    Tensor whole = normal ? random_normal(g, "w", Shape{3, 17}, {4, 2, c}) : random_uniform(g, "w", Shape{3, 17}, {4, 2, c});
+    RandomStream part{4, 2, c, 17, 7};
+    Tensor slice = normal ? random_normal(g, "s", Shape{3, 5}, part) : random_uniform(g, "s", Shape{3, 5}, part);
+    g.keep(whole);
+    g.keep(slice);
+    Executor ex(test::runtime(), g);
+    ex.forward();
+    const auto w = ex.get(whole), s = ex.get(slice);
+    for (size_t r = 0; r < 3; ++r)
+      for (size_t k = 0; k < 5; ++k) BOOST_TEST(s[r * 5 + k] == w[r * 17 + 7 + k]);
+  }
+}
+
 BOOST_AUTO_TEST_CASE(moments) {
   const size_t n = size_t{1} << 18;
   const auto u = draw(false, n, 3, 1, 0), z = draw(true, n, 3, 2, 0);

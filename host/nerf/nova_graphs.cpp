@@ -195,22 +195,28 @@ FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g) {
 
 // The step's stratified jitter [R, S] and density noise [N, R * S] (N = s.nerfs), drawn on
 // the device from the run's seed and the step (StepGraph::draws).
-void draw_randomness(StepGraph& s, const TrainConfig& c, size_t R, size_t S) {
+// With a slice, the draws of its rays of the whole step's [R_all, S] and [N, R_all S].
+void draw_randomness(StepGraph& s, const TrainConfig& c, size_t R, size_t S, RaySlice slice) {
   s.draws = std::make_shared<DrawCounter>();
-  s.jitter = random_uniform(s.graph, "jitter", Shape{R, S}, {c.seed, kJitterStream, s.draws});
+  RandomStream jitter{c.seed, kJitterStream, s.draws}, noise{c.seed, kNoiseStream, s.draws};
+  if (slice.global_rays) {
+    jitter.view_cols = noise.view_cols = R * S;
+    jitter.global_cols = noise.global_cols = slice.global_rays * S;
+    jitter.col_offset = noise.col_offset = slice.first_ray * S;
+  }
+  s.jitter = random_uniform(s.graph, "jitter", Shape{R, S}, jitter);
   if (c.noise_std > 0)
-    s.noise = random_normal(s.graph, "noise", Shape{static_cast<size_t>(s.nerfs), R * S},
-                            {c.seed, kNoiseStream, s.draws}, c.noise_std);
+    s.noise = random_normal(s.graph, "noise", Shape{static_cast<size_t>(s.nerfs), R * S}, noise, c.noise_std);
 }
 
-std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& geo) {
+std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& geo, RaySlice slice) {
   auto s = std::make_unique<StepGraph>();
   Graph& g = s->graph;
   const size_t R = static_cast<size_t>(c.rays), S = static_cast<size_t>(c.samples);
   s->nerfs = 1;
   s->pixels = g.input("pixels", Shape{R, 2});
   s->cameras = g.input("cameras", Shape{1, kCameraFloats});
-  draw_randomness(*s, c, R, S);
+  draw_randomness(*s, c, R, S, slice);
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1}));
@@ -226,7 +232,7 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   return s;
 }
 
-std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeometry& geo) {
+std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeometry& geo, RaySlice slice) {
   const int K = geo.num_objects;
   if (K < 1) throw Error("joint training needs at least one object NeRF", kExitInternal);
   auto s = std::make_unique<StepGraph>();
@@ -236,7 +242,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->nerfs = static_cast<int>(N);
   s->pixels = g.input("pixels", Shape{R, 2});
   s->cameras = g.input("cameras", Shape{N, kCameraFloats});
-  draw_randomness(*s, c, R, S);
+  draw_randomness(*s, c, R, S, slice);
   s->times = g.input("times", Shape{static_cast<size_t>(K), 1});
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   s->target_masks = g.input("target_masks", Shape{N, R});

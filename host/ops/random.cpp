@@ -10,31 +10,39 @@ namespace {
 
 class RandomOp final : public Op {
  public:
-  RandomOp(const char* kernel, size_t n, RandomStream rs, float scale)
-      : kernel_(kernel), n_(n), rs_(std::move(rs)), scale_(scale) {}
+  RandomOp(const char* kernel, size_t n, size_t cols, RandomStream rs, float scale)
+      : kernel_(kernel), n_(n), cols_(cols), rs_(std::move(rs)), scale_(scale) {}
   std::string type() const override { return kernel_; }
 
   void forward(ExecContext& ctx) override {
     const uint64_t c = rs_.counter ? rs_.counter->value : 0;
     ctx.launch("random", kernel_)
-        .arg(ctx.out(0)).arg(detail::u32(n_, "random values")).arg(rs_.seed).arg(rs_.stream)
+        .arg(ctx.out(0)).arg(detail::u32(n_, "random values")).arg(detail::u32(cols_, "random columns"))
+        .arg(detail::u32(rs_.global_cols ? rs_.global_cols : cols_, "random global columns"))
+        .arg(detail::u32(rs_.col_offset, "random column offset")).arg(rs_.seed).arg(rs_.stream)
         .arg(static_cast<unsigned>(c & 0xffffffffu)).arg(static_cast<unsigned>(c >> 32)).arg(scale_)
-        .run((n_ + 3) / 4);
+        .run(n_);
   }
   void backward(ExecContext&) override {}
   std::vector<TensorId> saved_for_backward() const override { return {}; }
 
  private:
   const char* kernel_;
-  size_t n_;
+  size_t n_, cols_;
   RandomStream rs_;
   float scale_;
 };
 
 Tensor random_op(const char* kernel, Graph& g, const std::string& name, Shape shape, RandomStream rs, float scale) {
   if (shape.numel() == 0) throw Error(std::string(kernel) + ": '" + name + "' has no elements", kExitInternal);
+  const size_t cols = rs.view_cols ? rs.view_cols : shape.cols();
+  if (shape.numel() % cols != 0)
+    throw Error(std::string(kernel) + ": rows of " + std::to_string(cols) + " do not tile " + shape.str(), kExitInternal);
+  if (rs.global_cols && rs.col_offset + cols > rs.global_cols)
+    throw Error(std::string(kernel) + ": columns [" + std::to_string(rs.col_offset) + ", " +
+                std::to_string(rs.col_offset + cols) + ") exceed rows of " + std::to_string(rs.global_cols), kExitInternal);
   Tensor y = g.activation(name, shape);
-  g.add(std::make_unique<RandomOp>(kernel, shape.numel(), std::move(rs), scale), {}, {y});
+  g.add(std::make_unique<RandomOp>(kernel, shape.numel(), cols, std::move(rs), scale), {}, {y});
   return y;
 }
 

@@ -51,10 +51,14 @@ void write_text_atomic(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std::string run_dir)
+Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std::string run_dir,
+                 GradientReducer* reducer)
     : rt_(rt), scene_(scene), config_(config), run_dir_(std::move(run_dir)),
-      geometry_(ray_geometry(scene)), rng_(config.seed) {
+      geometry_(ray_geometry(scene)), rng_(config.seed), reducer_(reducer) {
   validate(config_);
+  if (ranks() > 1 && static_cast<size_t>(config_.rays) % ranks() != 0)
+    throw Error("--rays " + std::to_string(config_.rays) + " cannot be split evenly over " + std::to_string(ranks()) +
+                " ranks");
   if (scene.frames.empty()) throw Error("scene '" + scene.source + "' has no frames");
   std::error_code ec;
   fs::create_directories(run_dir_, ec);
@@ -69,8 +73,41 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
     for (const Frame& f : scene.frames) times.push_back(f.time);
     occupancy_->enable_updates(rt_, config_.field, geometry_, times, {config_.occupancy_warmup, config_.occupancy_every});
   }
-  write_text_atomic(run_dir_ + "/" + kConfigFile,
-                    format_config(config_, {"# the scene this run trained on", "scene = " + scene.source}));
+  if (writes_files())
+    write_text_atomic(run_dir_ + "/" + kConfigFile,
+                      format_config(config_, {"# the scene this run trained on", "scene = " + scene.source}));
+}
+
+RaySlice Trainer::ray_slice() const {
+  if (ranks() == 1) return {};
+  const size_t R = static_cast<size_t>(config_.rays);
+  return {R, static_cast<size_t>(reducer_->rank()) * (R / ranks())};
+}
+
+// The mean over ranks of their gradients: each rank's is of its own rays' mean loss, so the
+// mean is the gradient of the whole step's (for losses that are means over rays).
+void Trainer::reduce_gradients() {
+  const size_t n = exec_->parameter_floats();
+  std::vector<float> g(n);
+  rt_.download(exec_->gradient_arena(), g.data(), n * sizeof(float));
+  reducer_->sum(g);
+  const float inv = 1.0f / static_cast<float>(ranks());
+  for (float& v : g) v *= inv;
+  rt_.upload(exec_->gradient_arena(), g.data(), n * sizeof(float));
+}
+
+// Loss, terms, PSNR and skipped samples as the means over ranks.
+void Trainer::reduce_progress(TrainProgress& p) {
+  std::vector<float> v{static_cast<float>(p.loss), static_cast<float>(p.kept)};
+  for (auto& [name, t] : p.terms) v.push_back(static_cast<float>(t));
+  v.push_back(static_cast<float>(std::pow(10.0, -p.psnr / 10.0)));
+  reducer_->sum(v);
+  const double inv = 1.0 / static_cast<double>(ranks());
+  p.loss = v[0] * inv;
+  if (p.kept >= 0) p.kept = v[1] * inv;
+  for (size_t i = 0; i < p.terms.size(); ++i) p.terms[i].second = v[2 + i] * inv;
+  const double m = v.back() * inv;
+  p.psnr = m > 0 ? -10.0 * std::log10(m) : 99.0;
 }
 
 Trainer::~Trainer() = default;
@@ -95,8 +132,10 @@ bool Trainer::joint_phase(long step) const {
 void Trainer::ensure_phase() {
   const bool joint = joint_phase(step_);
   if (exec_ && graph_joint_ == joint) return;
-  std::unique_ptr<StepGraph> g = joint ? build_joint_graph(config_, geometry_)
-                                       : build_pretrain_graph(config_, geometry_);
+  TrainConfig local = config_;
+  local.rays = config_.rays / static_cast<int>(ranks());
+  std::unique_ptr<StepGraph> g = joint ? build_joint_graph(local, geometry_, ray_slice())
+                                       : build_pretrain_graph(local, geometry_, ray_slice());
   ExecutorOptions eo;
   eo.seed = config_.seed;
   eo.profile = profile_;
@@ -117,7 +156,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   const bool joint = graph_joint_;
   const long phase_step = joint ? step_ - c.pretrain_steps : step_;
   const size_t F = scene_.frames.size();
-  const size_t R = static_cast<size_t>(c.rays);
+  size_t R = static_cast<size_t>(c.rays);  // this rank's rays once the batch is drawn
   const int N = graph_->nerfs;
 
   size_t fi = static_cast<size_t>(uniform01(rng_) * static_cast<float>(F)) % F;
@@ -163,6 +202,18 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     batch = draw_pixels(frame.rgb, frame.masks, background_only, c.rays, rng_);
   }
 
+  if (ranks() > 1) {  // this rank's share of the step's rays
+    const RaySlice slice = ray_slice();
+    const size_t n = R / ranks(), a = slice.first_ray;
+    PixelBatch mine;
+    mine.pixels.assign(batch.pixels.begin() + 2 * a, batch.pixels.begin() + 2 * (a + n));
+    mine.rgb.assign(batch.rgb.begin() + 3 * a, batch.rgb.begin() + 3 * (a + n));
+    for (size_t k = 0; k < batch.masks.size() / R; ++k)
+      mine.masks.insert(mine.masks.end(), batch.masks.begin() + k * R + a, batch.masks.begin() + k * R + a + n);
+    mine.region_rays = batch.region_rays;
+    batch = std::move(mine);
+    R = n;
+  }
   graph_->draws->value = static_cast<uint64_t>(step_);
   exec_->set(graph_->pixels, batch.pixels);
   exec_->set(graph_->cameras, camera_rows(cameras));
@@ -197,6 +248,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   }
   exec_->forward();
   exec_->backward();
+  if (ranks() > 1) reduce_gradients();
   const float lr = c.lr * static_cast<float>(std::pow(c.lr_decay, static_cast<double>(phase_step) / c.lr_decay_steps));
   adam_->step(exec_->parameter_arena(), exec_->gradient_arena(), lr);
   ++step_;
@@ -221,6 +273,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     }
     const double m = exec_->get(graph_->psnr_mse).at(0);
     p.psnr = m > 0 ? -10.0 * std::log10(m) : 99.0;
+    if (ranks() > 1) reduce_progress(p);
   }
 }
 
@@ -237,8 +290,11 @@ void Trainer::run(const std::function<void(const TrainProgress&)>& progress, lon
   auto window_start = start;
   long window_steps = 0;
   double pretrain_step_s = 0, joint_step_s = 0;  // recent seconds per step, for the ETA
-  std::ofstream metrics(run_dir_ + "/" + kMetricsFile, std::ios::app);
-  if (!metrics) throw Error("cannot write '" + run_dir_ + "/" + kMetricsFile + "'");
+  std::ofstream metrics;
+  if (writes_files()) {
+    metrics.open(run_dir_ + "/" + kMetricsFile, std::ios::app);
+    if (!metrics) throw Error("cannot write '" + run_dir_ + "/" + kMetricsFile + "'");
+  }
   while (step_ < end) {
     const bool log = (step_ + 1) % config_.log_every == 0 || step_ + 1 == end;
     TrainProgress p;
@@ -279,7 +335,7 @@ void Trainer::run(const std::function<void(const TrainProgress&)>& progress, lon
       window_start = now;
       window_steps = 0;
     }
-    if (step_ % config_.checkpoint_every == 0 || step_ == end) write_checkpoint_now();
+    if ((step_ % config_.checkpoint_every == 0 || step_ == end) && writes_files()) write_checkpoint_now();
   }
 }
 
@@ -345,7 +401,7 @@ void Trainer::resume() {
       throw mismatch(e.what());
     }
   }
-  truncate_metrics(run_dir_ + "/" + kMetricsFile, step_);
+  if (writes_files()) truncate_metrics(run_dir_ + "/" + kMetricsFile, step_);
 }
 
 }  // namespace nova

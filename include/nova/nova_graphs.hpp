@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "nova/distributed.hpp"
 #include "nova/graph.hpp"
 #include "nova/losses.hpp"
 #include "nova/occupancy.hpp"
@@ -68,9 +69,11 @@ bool disparity_usable(const RayGeometry& g);
 bool depth_term_active(const TrainConfig& c, const RayGeometry& g);
 
 // The static NeRF alone on `rays` rays (background pixels): mse of its colour.
-std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& g);
+// With a slice (data-parallel training, distributed.hpp) the graph takes c.rays rays, the
+// slice's share, and draws the randomness of those rays of the whole step.
+std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& g, RaySlice slice = {});
 // All 1 + K NeRFs with the novel-view losses of c.weights (K >= 1).
-std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeometry& g);
+std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeometry& g, RaySlice slice = {});
 
 struct ViewGraph {
   Graph graph;

@@ -23,6 +23,14 @@ struct RandomStream {
   uint32_t seed = 0;
   uint32_t stream = 0;  // distinct draws of one graph take distinct streams
   std::shared_ptr<const DrawCounter> counter;
+  // A slice of a larger draw: the tensor's rows (its last dimension's values) are columns
+  // [col_offset, col_offset + cols) of rows `global_cols` long (0: the tensor's own width).
+  // A rank of a data-parallel job that takes rays [a, b) of a step draws exactly what one
+  // process drawing all rays draws for them.
+  size_t global_cols = 0, col_offset = 0;
+  // The row width the slice arithmetic uses (0: the tensor's last dimension); a [R, S] draw
+  // sliced by rays reads as one row of R S values.
+  size_t view_cols = 0;
 };
 
 // [shape] of scale * U[0, 1) (values multiples of 2^-24, so exact in float32).

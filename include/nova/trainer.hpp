@@ -13,6 +13,7 @@
 #include "nova/checkpoint.hpp"
 #include "nova/executor.hpp"
 #include "nova/nova_graphs.hpp"
+#include "nova/distributed.hpp"
 #include "nova/occupancy_estimator.hpp"
 #include "nova/optim.hpp"
 #include "nova/runtime.hpp"
@@ -40,8 +41,12 @@ inline const std::string kMetricsFile = "metrics.jsonl";
 
 class Trainer {
  public:
-  // `scene` must outlive the trainer. The run folder is created when missing.
-  Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std::string run_dir);
+  // `scene` must outlive the trainer. The run folder is created when missing. With a
+  // `reducer` of N > 1 ranks (distributed.hpp; it must outlive the trainer) this rank trains
+  // on its share of every step's rays (config.rays must divide by N) and only rank 0 writes
+  // config.ini, metrics.jsonl and checkpoints.
+  Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std::string run_dir,
+          GradientReducer* reducer = nullptr);
   ~Trainer();
 
   // Restores RUN/checkpoint.bin: Error when it is missing, corrupt, or written for other
@@ -91,6 +96,12 @@ class Trainer {
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
   // Empty-space skipping (config_.occupancy): the grids of the static and object NeRFs.
   std::unique_ptr<OccupancyEstimator> occupancy_;  // with TrainConfig::occupancy
+  GradientReducer* reducer_ = nullptr;
+  size_t ranks() const { return reducer_ ? static_cast<size_t>(reducer_->size()) : 1; }
+  bool writes_files() const { return !reducer_ || reducer_->rank() == 0; }
+  RaySlice ray_slice() const;
+  void reduce_gradients();
+  void reduce_progress(TrainProgress& p);
 };
 
 }  // namespace nova
