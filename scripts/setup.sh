@@ -11,6 +11,7 @@ PACKAGES=(
   libopencv-dev
   libboost-program-options-dev libboost-test-dev
   libopenblas-dev   # host BLAS: the "host" GEMM provider of CPU devices (loaded at run time) and the benches
+  libopenmpi-dev openmpi-bin  # MPI data-parallel `nova train` (mpirun -np N); the CLI alone links it
 )
 
 missing=()

@@ -2,11 +2,13 @@
 // NOVA scene headless. Options come from the preset, then the config file, then the command
 // line (later wins); every option of the table in train_config.hpp is a flag here.
 #include <cstdio>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
+#include "cli/mpi_job.hpp"
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
 #include "nova/gemm.hpp"
@@ -22,7 +24,9 @@ void print_progress(const TrainProgress& p) { std::cerr << progress_line(p) << "
 
 }  // namespace
 
-int train(const Args& args) {
+// The command, on one process or as one rank of an MPI job (`mpi`: null for one process).
+int train_rank(const Args& args, MpiJob* mpi) {
+  const bool lead = !mpi || mpi->rank() == 0;  // rank 0 prints and writes the run folder
   po::options_description desc("nova train options");
   add_common_options(desc);
   desc.add_options()("scene", po::value<std::string>()->required(), "scene folder (nova synth, NOVA/DynamicNeRF, LLFF, Blender)")(
@@ -70,39 +74,62 @@ int train(const Args& args) {
 
   if (!resume && fs::exists(out) && !fs::is_empty(out))
     throw Error("run folder '" + out + "' already exists and is not empty: pass --resume to continue it, or choose another --out");
+  if (mpi) mpi->barrier();  // every rank has checked the folder before rank 0 fills it
 
   Scene scene = load_training_scene(vm["scene"].as<std::string>(), config);
-  const DeviceInfo device = select_device(vm["device"].as<std::string>());
+  const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   const bool profile = vm["profile"].as<bool>();
   Runtime rt(device, profile);
-  std::cerr << "nova train: " << scene.name << ", " << scene.frames.size() << " frames at "
+  if (mpi)
+    std::cerr << "nova train: rank " << mpi->rank() << " of " << mpi->size() << " on " << device.id() << " "
+              << device.name << "\n";
+  if (lead) std::cerr << "nova train: " << scene.name << ", " << scene.frames.size() << " frames at "
             << scene.frames[0].rgb.width << "x" << scene.frames[0].rgb.height << ", 1 + " << scene.num_objects
             << " NeRFs, preset " << config.preset << ", " << config.pretrain_steps << " + " << config.steps
             << " steps on " << device.name << "\n";
   // Which GEMMs run matters for speed (and, through rounding, for the exact numbers).
   const GemmProvider gemms = gemm_provider(rt);
-  std::cerr << "GEMMs: " << gemm_provider_name(gemms);
-  if (gemms == GemmProvider::Tuned)
-    std::cerr << " (the tuning cache's winners, else "
-              << (host_gemm_available(rt) ? "the host BLAS " + host_blas_library() : std::string("CLBlast")) << ")";
-  std::cerr << "\n";
+  if (lead) {
+    std::cerr << "GEMMs: " << gemm_provider_name(gemms);
+    if (gemms == GemmProvider::Tuned)
+      std::cerr << " (the tuning cache's winners, else "
+                << (host_gemm_available(rt) ? "the host BLAS " + host_blas_library() : std::string("CLBlast")) << ")";
+    std::cerr << "\n";
+  }
   const bool created = !fs::exists(out);
   try {
-    Trainer trainer(rt, scene, config, out);
+    Trainer trainer(rt, scene, config, out, mpi ? &mpi->reducer() : nullptr);
     if (resume) {
       trainer.resume();
-      std::cerr << "resumed at step " << trainer.step() << "\n";
+      if (lead) std::cerr << "resumed at step " << trainer.step() << "\n";
     }
     trainer.set_profile(profile);
-    trainer.run(print_progress);
-    if (profile) std::cerr << trainer.profile_table();
+    trainer.run(lead ? print_progress : std::function<void(const TrainProgress&)>());
+    if (profile && lead) std::cerr << trainer.profile_table();
   } catch (...) {
     // A run that failed before its first checkpoint leaves nothing behind.
-    if (created && !fs::exists(out + "/" + kCheckpointFile)) fs::remove_all(out);
+    if (lead && created && !fs::exists(out + "/" + kCheckpointFile)) fs::remove_all(out);
     throw;
   }
+  if (!lead) return 0;
   std::cout << "trained " << out << " (" << kCheckpointFile << ", " << kMetricsFile << ", " << kConfigFile << ")\n";
   return 0;
+}
+
+int train(const Args& args) {
+  std::unique_ptr<MpiJob> mpi = start_mpi_job();
+  if (!mpi || mpi->size() == 1) return train_rank(args, nullptr);
+  // A rank that fails ends the job: the others would wait for it in the next gradient sum.
+  try {
+    return train_rank(args, mpi.get());
+  } catch (const Error& e) {
+    std::cerr << "nova train: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(e.exit_code());
+  } catch (const std::exception& e) {
+    std::cerr << "nova train: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(kExitInternal);
+  }
+  return kExitInternal;  // abort() does not return
 }
 
 }  // namespace nova::cli

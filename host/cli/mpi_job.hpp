@@ -1,0 +1,32 @@
+#pragma once
+// `nova train` under mpirun: one rank per process, each on its own device, training one run
+// together (distributed.hpp). Built with MPI when CMake finds it (NOVA_MPI=AUTO|ON|OFF); the
+// core never links it.
+#include <memory>
+#include <string>
+
+#include "nova/distributed.hpp"
+#include "nova/runtime.hpp"
+
+namespace nova::cli {
+
+class MpiJob {
+ public:
+  virtual ~MpiJob() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  virtual GradientReducer& reducer() = 0;
+  virtual void barrier() = 0;
+  // Ends every rank of the job (after this rank has printed its error).
+  [[noreturn]] virtual void abort(int code) = 0;
+};
+
+// The job when this process was started by mpirun (Open MPI's or a PMI launcher's variables),
+// else null. Error (exit 2) when it was, but nova was built without MPI.
+std::unique_ptr<MpiJob> start_mpi_job();
+
+// The device of this rank when none is chosen (--device, NOVA_DEVICE): the node-local rank's
+// GPU, else its CPU device, counting the node's devices of that type round-robin.
+DeviceInfo rank_device(const std::string& selector);
+
+}  // namespace nova::cli
