@@ -1,7 +1,7 @@
 #pragma once
 // nova-bench: one subcommand per benchmark, each printing a table and CSV (and PNG plots
-// where a picture says more). Speeds are compared as ratios inside one run: this machine
-// is shared and noisy.
+// where a picture says more). Speeds are compared as ratios inside one run: shared machines
+// are noisy.
 #include <functional>
 #include <string>
 #include <vector>

@@ -1,4 +1,4 @@
-// nova-bench devices on two PoCL devices of this machine (POCL_DEVICES="pthread basic"): one
+// nova-bench devices on two PoCL devices of the test machine (POCL_DEVICES="pthread basic"): one
 // row per device with the MLP's error against float64 within float32 rounding, a PSNR and its
 // difference from the first device, and the four outputs; a device that fails (here: an MLP
 // batch no device can hold) is a row naming the stage and the error, the run goes on and

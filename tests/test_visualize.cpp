@@ -1,4 +1,4 @@
-// Quantisation, the depth colormap and MP4 output. This machine's OpenCV 4.6 (Debian 12) has
+// Quantisation, the depth colormap and MP4 output. Debian 12's OpenCV 4.6 has
 // the FFmpeg backend with an 'mp4v' encoder, so videos are written and read back here; the
 // "no encoder" error is reached through a container FFmpeg does not know.
 #include <boost/test/unit_test.hpp>
