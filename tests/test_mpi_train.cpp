@@ -1,7 +1,7 @@
 // `mpirun -np 2 nova train` on two PoCL devices (POCL_DEVICES="pthread pthread") against one
 // process on the same global batch: the same losses at every logged step, one run folder
-// written by rank 0 alone (one metrics line per step). Reported as skipped where nova was
-// built without MPI.
+// written by rank 0 alone (one metrics line per step); and `mpirun -np 2 nova eval` of that
+// run against one process. Reported as skipped where nova was built without MPI.
 //
 // Tolerance: as tests/test_data_parallel.cpp, with the terms normalised by statistics of the
 // batch switched off the split changes only the order of float sums: 1e-4 relative over 20
@@ -65,6 +65,25 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::fabs(a[i] - b[i]) / a[i]);
   BOOST_TEST_MESSAGE("largest relative loss difference, 2 MPI ranks against one process: " << worst);
   BOOST_TEST(worst < 1e-4);
+
+  // nova eval deals the views out over the ranks and gathers the scores (in float32): the
+  // same table as one process, to float32's 6 digits.
+  fs::copy(dir / "two", dir / "eval_one", fs::copy_options::recursive);
+  fs::copy(dir / "two", dir / "eval_two", fs::copy_options::recursive);
+  const CommandResult e1 = run_built("nova", "eval --run " + (dir / "eval_one").string(), dir);
+  BOOST_TEST_REQUIRE(e1.code == 0, e1.err);
+  const CommandResult e2 = run_built("nova", "eval --run " + (dir / "eval_two").string(), dir,
+                                     "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 "
+                                     "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + mpirun);
+  BOOST_TEST_REQUIRE(e2.code == 0, e2.err);
+  auto mean_psnr = [](const fs::path& json) {
+    const std::string t = read_all(json);
+    const size_t at = t.find("\"mean_psnr\": ");
+    return at == std::string::npos ? -1.0 : std::stod(t.substr(at + 13));
+  };
+  const double m1 = mean_psnr(dir / "eval_one" / "eval.json"), m2 = mean_psnr(dir / "eval_two" / "eval.json");
+  BOOST_TEST(m1 > 5.0);
+  BOOST_TEST(std::fabs(m1 - m2) <= 1e-4 * m1, m1 << " against " << m2);
 #endif
 }
 

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli/mpi_job.hpp"
 #include "cli/options.hpp"
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
@@ -50,7 +51,11 @@ void json_scores(std::ostream& o, const std::string& key, const std::vector<Scor
 
 }  // namespace
 
-int eval(const Args& args) {
+// The command on one process, or as one rank of an MPI job (`mpi`): the views are dealt out
+// round-robin, the scores gathered, and rank 0 scores the composition targets, prints and
+// writes eval.json.
+int eval_rank(const Args& args, MpiJob* mpi) {
+  const bool lead = !mpi || mpi->rank() == 0;
   po::options_description desc("nova eval options");
   add_common_options(desc);
   desc.add_options()("run", po::value<std::string>()->required(), "trained run folder")(
@@ -90,11 +95,20 @@ int eval(const Args& args) {
                   "' (train with --holdout N to hold frames out, or use --split)");
   }
 
-  const DeviceInfo device = select_device(vm["device"].as<std::string>());
+  const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   Runtime rt(device, false);
   ViewRenderer renderer(rt, run.files.config, run.geometry, run.files.checkpoint);
   RenderProgress progress;
-  renderer.set_progress([&](size_t done, size_t total) { progress(done, total); });
+  if (lead) renderer.set_progress([&](size_t done, size_t total) { progress(done, total); });
+  // This rank's views: every size-th from its rank on.
+  std::vector<size_t> mine;
+  for (size_t i = 0; i < views.size(); ++i)
+    if (!mpi || static_cast<int>(i % static_cast<size_t>(mpi->size())) == mpi->rank()) mine.push_back(i);
+  std::vector<GroundTruthView> all_views;
+  if (mpi) {
+    all_views = std::move(views);
+    for (size_t i : mine) views.push_back(all_views[i]);
+  }
   progress.start("view 1/" + std::to_string(views.size()));
   const BlendChoice blend = blend_choice(vm);
   const std::string pictures = run_dir + "/eval";
@@ -106,10 +120,21 @@ int eval(const Args& args) {
   const auto write_and_count = [&](size_t i, const std::string& stem, const Image8& out) {
     write(i, stem, out);
     progress.start("view " + std::to_string(i + 2) + "/" + std::to_string(views.size()));
-    std::cerr << "\revaluated " << i + 1 << "/" << views.size() << std::flush;
+    if (lead) std::cerr << "\revaluated " << i + 1 << "/" << views.size() << std::flush;
   };
-  const std::vector<Score> scores = score_views(renderer, scene.num_objects, views, blend.scene_views, write_and_count);
-  if (!views.empty()) std::cerr << "\n";
+  std::vector<Score> scores = score_views(renderer, scene.num_objects, views, blend.scene_views, write_and_count);
+  if (!views.empty() && lead) std::cerr << "\n";
+  if (mpi) {  // every view's PSNR and SSIM, in the order of all views, on every rank
+    std::vector<float> v(2 * all_views.size(), 0.0f);
+    for (size_t k = 0; k < mine.size(); ++k) {
+      v[2 * mine[k]] = static_cast<float>(scores[k].psnr);
+      v[2 * mine[k] + 1] = static_cast<float>(scores[k].ssim);
+    }
+    mpi->reducer().sum(v);
+    scores.clear();
+    for (size_t i = 0; i < all_views.size(); ++i) scores.push_back({view_stem(all_views[i].name), v[2 * i], v[2 * i + 1]});
+  }
+  if (!lead) return 0;
   const std::vector<Score> compose = score_compose_targets(renderer, scene, blend.composition, write);
 
   const auto [mp, ms] = mean_scores(scores);
@@ -140,6 +165,21 @@ int eval(const Args& args) {
     std::cout << "composition targets: mean PSNR " << std::setprecision(2) << cp << " dB over " << compose.size() << "\n";
   std::cout << "wrote " << path << " and renders in " << pictures << "/ (" << std::setprecision(1) << secs << " s)\n";
   return 0;
+}
+
+int eval(const Args& args) {
+  std::unique_ptr<MpiJob> mpi = start_mpi_job();
+  if (!mpi || mpi->size() == 1) return eval_rank(args, nullptr);
+  try {
+    return eval_rank(args, mpi.get());
+  } catch (const Error& e) {
+    std::cerr << "nova eval: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(e.exit_code());
+  } catch (const std::exception& e) {
+    std::cerr << "nova eval: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(kExitInternal);
+  }
+  return kExitInternal;  // abort() does not return
 }
 
 }  // namespace nova::cli
