@@ -1,7 +1,8 @@
 // `mpirun -np 2 nova train` on two PoCL devices (POCL_DEVICES="pthread pthread") against one
 // process on the same global batch: the same losses at every logged step, one run folder
-// written by rank 0 alone (one metrics line per step); and `mpirun -np 2 nova eval` of that
-// run against one process. Reported as skipped where nova was built without MPI.
+// written by rank 0 alone (one metrics line per step); and `mpirun -np 2 nova eval` and
+// `nova render` of that run against one process. Reported as skipped where nova was built
+// without MPI.
 //
 // Tolerance: as tests/test_data_parallel.cpp, with the terms normalised by statistics of the
 // batch switched off the split changes only the order of float sums: 1e-4 relative over 20
@@ -84,6 +85,24 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   const double m1 = mean_psnr(dir / "eval_one" / "eval.json"), m2 = mean_psnr(dir / "eval_two" / "eval.json");
   BOOST_TEST(m1 > 5.0);
   BOOST_TEST(std::fabs(m1 - m2) <= 1e-4 * m1, m1 << " against " << m2);
+
+  // nova render deals the frames out and rank 0 commits one folder: the same files, byte for
+  // byte (every rank renders on the same kind of device).
+  const std::string render = "render --run " + (dir / "two").string() + " --out ";
+  const CommandResult r1 = run_built("nova", render + (dir / "render_one").string(), dir);
+  BOOST_TEST_REQUIRE(r1.code == 0, r1.err);
+  const CommandResult r2 = run_built("nova", render + (dir / "render_two").string(), dir,
+                                     "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 "
+                                     "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + mpirun);
+  BOOST_TEST_REQUIRE(r2.code == 0, r2.err);
+  size_t files = 0;
+  for (const auto& e : fs::directory_iterator(dir / "render_one")) {
+    ++files;
+    const fs::path other = dir / "render_two" / e.path().filename();
+    BOOST_TEST((fs::exists(other) && read_all(e.path()) == read_all(other)), e.path().filename());
+  }
+  BOOST_TEST(files >= 10u * 3u);  // every frame's colour, depth and masks
+  BOOST_TEST(!fs::exists(dir / "render_two.partial"));
 #endif
 }
 

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli/mpi_job.hpp"
 #include "cli/options.hpp"
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
@@ -61,7 +62,11 @@ std::string describe_pivot(const std::string& target, size_t n, const ComposeIns
 
 }  // namespace
 
-int render(const Args& args) {
+// The command on one process, or as one rank of an MPI job (`mpi`): the frames of a view
+// sequence are dealt out round-robin and written into rank 0's staging folder; rank 0 renders
+// the composition targets, assembles the video and commits the folder.
+int render_rank(const Args& args, MpiJob* mpi) {
+  const bool lead = !mpi || mpi->rank() == 0;
   po::options_description desc("nova render options");
   add_common_options(desc);
   desc.add_options()("run", po::value<std::string>()->required(), "trained run folder")(
@@ -104,15 +109,21 @@ int render(const Args& args) {
   Camera camera = scene.frames[static_cast<size_t>(cam)].camera;
   if (vm.count("pose")) camera = parse_pose(vm["pose"].as<std::string>(), camera);
 
-  const DeviceInfo device = select_device(vm["device"].as<std::string>());
+  const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   Runtime rt(device, false);
   ViewRenderer renderer(rt, run.files.config, run.geometry, run.files.checkpoint);
   RenderProgress progress;
-  renderer.set_progress([&](size_t done, size_t total) { progress(done, total); });
-  StagedFolder out(vm["out"].as<std::string>(), vm["force"].as<bool>());
+  if (lead) renderer.set_progress([&](size_t done, size_t total) { progress(done, total); });
+  // Rank 0 owns the staging folder; the other ranks write into it once it exists.
+  std::unique_ptr<StagedFolder> staged;
+  if (lead) staged = std::make_unique<StagedFolder>(vm["out"].as<std::string>(), vm["force"].as<bool>());
+  if (mpi) mpi->barrier();
+  const std::string staging = staged ? staged->path() : StagedFolder::staging_path(vm["out"].as<std::string>());
   std::vector<Image8> frames;
   size_t views = 0;
-  if (!spec.empty()) {
+  if (!spec.empty() && !lead) {
+    // The composition targets are few: rank 0 renders them.
+  } else if (!spec.empty()) {
     for (const ComposeTarget& t : spec.targets) {
       ViewRequest req;
       req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
@@ -128,7 +139,7 @@ int render(const Args& args) {
         req.instances.push_back(placed_instance(i, pv.pivot));
       }
       progress.start(t.name);
-      frames.push_back(write_view(renderer.render(req), out.path(), t.name, masks));
+      frames.push_back(write_view(renderer.render(req), staging, t.name, masks));
       std::cerr << "rendered " << t.name << " (" << t.instances.size() << " instances)\n";
       ++views;
     }
@@ -142,22 +153,47 @@ int render(const Args& args) {
       for (const Frame& f : scene.frames) times.push_back(f.time);
     }
     for (size_t i = 0; i < times.size(); ++i) {
+      if (mpi && static_cast<int>(i % static_cast<size_t>(mpi->size())) != mpi->rank()) continue;
       ViewRequest req;
       req.camera = camera;
       req.hard_blend = blend.scene_views;
       req.instances = scene_instances(scene.num_objects, times[i]);
       progress.start("view " + std::to_string(i + 1) + "/" + std::to_string(times.size()));
-      frames.push_back(write_view(renderer.render(req), out.path(), frame_name(i).substr(0, 3), masks));
-      std::cerr << "\rrendered " << i + 1 << "/" << times.size() << std::flush;
+      frames.push_back(write_view(renderer.render(req), staging, frame_name(i).substr(0, 3), masks));
+      if (lead) std::cerr << "\rrendered " << i + 1 << "/" << times.size() << std::flush;
       ++views;
     }
-    std::cerr << "\n";
+    if (lead) std::cerr << "\n";
+    if (mpi) {  // every frame on disk; rank 0 takes them back in order for the video
+      mpi->barrier();
+      views = times.size();
+      if (lead) {
+        frames.clear();
+        for (size_t i = 0; i < times.size(); ++i) frames.push_back(read_rgb(staging + "/" + frame_name(i).substr(0, 3) + ".png"));
+      }
+    }
   }
-  if (vm["video"].as<bool>()) write_video(frames, out.path() + "/video.mp4", vm["fps"].as<double>());
-  out.commit();
+  if (!lead) return 0;
+  if (vm["video"].as<bool>()) write_video(frames, staging + "/video.mp4", vm["fps"].as<double>());
+  staged->commit();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << "rendered " << views << " view(s) into " << vm["out"].as<std::string>() << " in " << secs << " s\n";
   return 0;
+}
+
+int render(const Args& args) {
+  std::unique_ptr<MpiJob> mpi = start_mpi_job();
+  if (!mpi || mpi->size() == 1) return render_rank(args, nullptr);
+  try {
+    return render_rank(args, mpi.get());
+  } catch (const Error& e) {
+    std::cerr << "nova render: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(e.exit_code());
+  } catch (const std::exception& e) {
+    std::cerr << "nova render: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(kExitInternal);
+  }
+  return kExitInternal;  // abort() does not return
 }
 
 }  // namespace nova::cli

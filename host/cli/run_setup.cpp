@@ -17,11 +17,16 @@ OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool 
   return r;
 }
 
+std::string StagedFolder::staging_path(std::string dir) {
+  while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+  return dir + ".partial";
+}
+
 StagedFolder::StagedFolder(std::string dir, bool replace) : dir_(std::move(dir)) {
   while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
   if (fs::exists(dir_) && !replace)
     throw Error("output folder '" + dir_ + "' already exists (pass --force to replace it)");
-  staging_ = dir_ + ".partial";
+  staging_ = staging_path(dir_);
   fs::remove_all(staging_);
   std::error_code ec;
   fs::create_directories(staging_, ec);

@@ -28,6 +28,8 @@ class StagedFolder {
   StagedFolder(std::string dir, bool replace);
   ~StagedFolder();  // removes the staging folder unless committed
   const std::string& path() const { return staging_; }
+  // Where the staging folder of `dir` is (other ranks of an MPI job write into it).
+  static std::string staging_path(std::string dir);
   void commit();
 
  private:
