@@ -167,19 +167,6 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   return 0;
 }
 
-int eval(const Args& args) {
-  std::unique_ptr<MpiJob> mpi = start_mpi_job();
-  if (!mpi || mpi->size() == 1) return eval_rank(args, nullptr);
-  try {
-    return eval_rank(args, mpi.get());
-  } catch (const Error& e) {
-    std::cerr << "nova eval: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(e.exit_code());
-  } catch (const std::exception& e) {
-    std::cerr << "nova eval: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(kExitInternal);
-  }
-  return kExitInternal;  // abort() does not return
-}
+int eval(const Args& args) { return run_as_ranks("eval", args, eval_rank); }
 
 }  // namespace nova::cli

@@ -3,6 +3,7 @@
 #include "cli/mpi_job.hpp"
 
 #include <cstdlib>
+#include <iostream>
 #include <vector>
 
 #include "nova/error.hpp"
@@ -99,6 +100,22 @@ std::unique_ptr<MpiJob> start_mpi_job() {
                 "(install libopenmpi-dev and rebuild, NOVA_MPI=ON)");
   return nullptr;
 #endif
+}
+
+int run_as_ranks(const char* command, const std::vector<std::string>& args,
+                 int (*body)(const std::vector<std::string>&, MpiJob*)) {
+  std::unique_ptr<MpiJob> mpi = start_mpi_job();
+  if (!mpi || mpi->size() == 1) return body(args, nullptr);
+  try {
+    return body(args, mpi.get());
+  } catch (const Error& e) {
+    std::cerr << "nova " << command << ": rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(e.exit_code());
+  } catch (const std::exception& e) {
+    std::cerr << "nova " << command << ": rank " << mpi->rank() << ": error: " << e.what() << std::endl;
+    mpi->abort(kExitInternal);
+  }
+  return kExitInternal;  // abort() does not return
 }
 
 DeviceInfo rank_device(const std::string& selector) {

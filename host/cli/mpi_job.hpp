@@ -4,6 +4,7 @@
 // core never links it.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "nova/distributed.hpp"
 #include "nova/runtime.hpp"
@@ -24,6 +25,12 @@ class MpiJob {
 // The job when this process was started by mpirun (Open MPI's or a PMI launcher's variables),
 // else null. Error (exit 2) when it was, but nova was built without MPI.
 std::unique_ptr<MpiJob> start_mpi_job();
+
+// Runs `body` on one process, or, under mpirun with more than one rank, as this rank of the
+// job: a rank that fails prints "nova COMMAND: rank R: error: ..." and ends the job (the other
+// ranks would wait for it at their next collective call).
+int run_as_ranks(const char* command, const std::vector<std::string>& args,
+                 int (*body)(const std::vector<std::string>&, MpiJob*));
 
 // The device of this rank when none is chosen (--device, NOVA_DEVICE): the node-local rank's
 // GPU, else its CPU device, counting the node's devices of that type round-robin.

@@ -181,19 +181,6 @@ int render_rank(const Args& args, MpiJob* mpi) {
   return 0;
 }
 
-int render(const Args& args) {
-  std::unique_ptr<MpiJob> mpi = start_mpi_job();
-  if (!mpi || mpi->size() == 1) return render_rank(args, nullptr);
-  try {
-    return render_rank(args, mpi.get());
-  } catch (const Error& e) {
-    std::cerr << "nova render: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(e.exit_code());
-  } catch (const std::exception& e) {
-    std::cerr << "nova render: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(kExitInternal);
-  }
-  return kExitInternal;  // abort() does not return
-}
+int render(const Args& args) { return run_as_ranks("render", args, render_rank); }
 
 }  // namespace nova::cli

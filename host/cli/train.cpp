@@ -116,20 +116,6 @@ int train_rank(const Args& args, MpiJob* mpi) {
   return 0;
 }
 
-int train(const Args& args) {
-  std::unique_ptr<MpiJob> mpi = start_mpi_job();
-  if (!mpi || mpi->size() == 1) return train_rank(args, nullptr);
-  // A rank that fails ends the job: the others would wait for it in the next gradient sum.
-  try {
-    return train_rank(args, mpi.get());
-  } catch (const Error& e) {
-    std::cerr << "nova train: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(e.exit_code());
-  } catch (const std::exception& e) {
-    std::cerr << "nova train: rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(kExitInternal);
-  }
-  return kExitInternal;  // abort() does not return
-}
+int train(const Args& args) { return run_as_ranks("train", args, train_rank); }
 
 }  // namespace nova::cli
