@@ -9,6 +9,7 @@ PACKAGES=(
   ocl-icd-libopencl1 ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
   libclblast-dev
   libopencv-dev
+  zlib1g-dev        # .npz scenes (deflated ZIP members)
   libboost-program-options-dev libboost-test-dev
   libopenblas-dev   # host BLAS: the "host" GEMM provider of CPU devices (loaded at run time) and the benches
   libopenmpi-dev openmpi-bin  # MPI data-parallel `nova train` (mpirun -np N); the CLI alone links it

@@ -1,5 +1,6 @@
-// Our DEFLATE decoder (for .npz files) against streams made by zlib (fixed and dynamic
-// Huffman blocks), its errors, and the tiny D-NeRF .npz when the optional shared data folder has it.
+// Inflating .npz members (through zlib) on known streams (fixed and dynamic Huffman blocks),
+// the errors of damaged ones naming the file, and the tiny D-NeRF .npz when a data folder
+// beside the repository has it.
 #include <boost/test/unit_test.hpp>
 #include <filesystem>
 
@@ -87,6 +88,7 @@ BOOST_AUTO_TEST_CASE(inflate_errors) {
   const std::string z = unhex(kFixed);
   expect_error([&] { data::inflate(z.substr(0, 8), 420, "cut.npz"); }, {"cut.npz", "truncated"});
   expect_error([&] { data::inflate(z, 421, "size.npz"); }, {"size.npz", "expected 421"});
+  expect_error([&] { data::inflate(z, 419, "long.npz"); }, {"long.npz", "more than the 419 bytes"});
   expect_error([&] { data::inflate(std::string(1, '\x07'), 1, "type.npz"); }, {"block type"});
 }
 

@@ -1,7 +1,6 @@
 #pragma once
 // Just enough of the ZIP format to read NumPy .npz files: the central directory (with Zip64
-// sizes), stored and deflated members, and our own DEFLATE decoder (RFC 1951), because
-// nova_io may not link zlib directly.
+// sizes), stored and deflated members (inflated by zlib).
 #include <map>
 #include <string>
 
