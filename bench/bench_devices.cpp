@@ -8,8 +8,8 @@
 //     host evaluation of the same network and weights (largest difference over the largest
 //     reference value);
 //   - a short fixed training of a scene (the tiny synthetic scene unless --scene): seconds
-//     per step, device memory of the joint step, camera-0 PSNR, and its difference from the
-//     first device that trained.
+//     per step, device memory of the joint step, seconds per rendered camera-0 view, camera-0
+//     PSNR, and its difference from the first device that trained.
 // Writes a Markdown table (stdout), devices.csv, devices.json and devices.png into --out; exits
 // 1 when a device failed (its row says where and why), 2 for bad options or scene.
 #include <sys/wait.h>
@@ -211,7 +211,10 @@ int run_one(const Options& o) {
   std::vector<GroundTruthView> views;
   for (const GroundTruthView& v : scene.gt_views)
     if (v.kind == "cam0") views.push_back(v);
+  const auto v0 = std::chrono::steady_clock::now();
   put("psnr", num(mean_scores(score_views(renderer, scene.num_objects, views, false)).first));
+  put("view_s", num(std::chrono::duration<double>(std::chrono::steady_clock::now() - v0).count() /
+                    static_cast<double>(std::max<size_t>(1, views.size()))));
   std::error_code ec;
   fs::remove_all(run, ec);
   put("stage", "done");
@@ -318,13 +321,14 @@ int devices(const Args& args) {
       {"name", "device"}, {"driver", "driver"}, {"units", "CUs"}, {"memory_mb", "memory MB"},
       {"mlp_samples_s", "MLP samples/s"}, {"mlp_gflops", "MLP GFLOP/s"}, {"mlp_out_err", "MLP output err"},
       {"mlp_grad_err", "MLP gradient err"}, {"train_s_per_step", "train s/step"}, {"device_mb", "step device MB"},
+      {"view_s", "render s/view"},
       {"psnr", "camera-0 PSNR"}, {"psnr_diff", "PSNR - first"}, {"status", "status"}};
   auto shown = [](const std::string& k, const std::string& v) {
     if (v.empty() || k == "name" || k == "driver" || k == "status" || k == "units" || k == "memory_mb") return v;
     std::ostringstream s;
     const double x = std::stod(v);
     if (k.find("err") != std::string::npos) s << std::scientific << std::setprecision(1) << x;
-    else s << std::fixed << std::setprecision(k == "mlp_samples_s" || k == "device_mb" ? 0 : k == "train_s_per_step" ? 3 : 2) << x;
+    else s << std::fixed << std::setprecision(k == "mlp_samples_s" || k == "device_mb" ? 0 : k == "train_s_per_step" || k == "view_s" ? 3 : 2) << x;
     return s.str();
   };
   std::ostringstream md, csv, json;

@@ -59,6 +59,7 @@ BOOST_AUTO_TEST_CASE(two_pocl_devices_side_by_side, *boost::unit_test::precondit
     BOOST_TEST(std::stod(row.at("mlp_grad_err")) < 1e-5);
     BOOST_TEST(std::stod(row.at("mlp_samples_s")) > 0.0);
     BOOST_TEST(std::stod(row.at("psnr")) > 5.0);
+    BOOST_TEST(std::stod(row.at("view_s")) > 0.0);
     BOOST_TEST(!row.at("psnr_diff").empty());
   }
   BOOST_TEST(rows[0].at("psnr_diff") == "0.000");
