@@ -2,6 +2,7 @@
 // nova-bench: one subcommand per benchmark, each printing a table and CSV (and PNG plots
 // where a picture says more). Speeds are compared as ratios inside one run: shared machines
 // are noisy.
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
@@ -29,5 +30,20 @@ const std::vector<Benchmark>& benchmarks();
 
 // Median of `repeats` timings of `fn` (seconds), after one untimed warm-up call.
 double time_median(int repeats, const std::function<void()>& fn);
+
+// A private folder under the system's temporary directory (named for `what` and the process),
+// removed with everything in it when the object goes.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& what);
+  ~ScratchDir();
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
 
 }  // namespace nova::bench

@@ -8,7 +8,7 @@
 //     host evaluation of the same network and weights (largest difference over the largest
 //     reference value);
 //   - a short fixed training of a scene (the tiny synthetic scene unless --scene): seconds
-//     per step, device memory of the joint step, seconds per rendered camera-0 view, camera-0
+//     per step after the first, device memory of the joint step, seconds per rendered camera-0 view, camera-0
 //     PSNR, and its difference from the first device that trained.
 // Writes a Markdown table (stdout), devices.csv, devices.json and devices.png into --out; exits
 // 1 when a device failed (its row says where and why), 2 for bad options or scene.
@@ -199,11 +199,14 @@ int run_one(const Options& o) {
   Scene scene = load_training_scene(o.str("scene"), c, true);
   const fs::path run = fs::path(path).parent_path() / ("run-" + std::to_string(::getpid()));
   Trainer t(rt, scene, c, run.string());
-  const auto a = std::chrono::steady_clock::now();
-  t.run();
+  // Timed after the first step (graph building, kernel compiles) up to the last step's
+  // progress report, which comes before run() writes its closing checkpoint.
+  t.run({}, 1);
   rt.finish();
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
-  put("train_s_per_step", num(secs / std::max(1, c.pretrain_steps + c.steps)));
+  const auto a = std::chrono::steady_clock::now();
+  auto b = a;
+  t.run([&](const TrainProgress&) { b = std::chrono::steady_clock::now(); });
+  put("train_s_per_step", num(std::chrono::duration<double>(b - a).count() / (t.total_steps() - 1)));
   put("device_mb", num(static_cast<double>(t.device_bytes()) / (1 << 20)));
   put("stage", "evaluation");
   const Checkpoint ck = t.checkpoint();  // the renderer keeps a reference to it
@@ -248,7 +251,8 @@ int devices(const Args& args) {
   }
   for (const char* k : {"batch", "depth", "width", "repeats", "check-rows"})
     if (o.integer(k) < 1) throw Error(std::string("--") + k + " must be >= 1");
-  if (o.integer("pretrain-steps") < 0 || o.integer("steps") < 1) throw Error("--pretrain-steps must be >= 0, --steps >= 1");
+  if (o.integer("pretrain-steps") < 0 || o.integer("steps") < 1 || o.integer("pretrain-steps") + o.integer("steps") < 2)
+    throw Error("--pretrain-steps must be >= 0, --steps >= 1, and the two at least 2 (the first step is not timed)");
   if (!o.str("one").empty()) return run_one(o);
 
   std::vector<DeviceInfo> chosen;
@@ -257,19 +261,10 @@ int devices(const Args& args) {
   if (o.str("devices") == "all") {
     chosen = all;
   } else {
-    std::stringstream s(o.str("devices"));
-    for (std::string sel; std::getline(s, sel, ',');) chosen.push_back(select_device(sel));
+    for (const std::string& sel : o.strings("devices")) chosen.push_back(select_device(sel));
   }
   const fs::path out = o.str("out");
-  const fs::path work = fs::temp_directory_path() / ("nova-bench-devices-" + std::to_string(::getpid()));
-  fs::create_directories(work);
-  struct Cleanup {
-    fs::path p;
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(p, ec);
-    }
-  } cleanup{work};
+  const ScratchDir work("devices");
   std::string scene = o.str("scene");
   if (scene.empty()) {
     scene = (work / "tiny").string();

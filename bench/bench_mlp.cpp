@@ -163,10 +163,7 @@ int mlp(const Args& args) {
             << ") -> 4; median of " << repeats << " after a warm-up\n\n";
 
   std::vector<GemmProvider> providers;
-  {
-    std::stringstream list(o.str("gemm"));
-    for (std::string name; std::getline(list, name, ',');) providers.push_back(parse_gemm_provider(name, "--gemm"));
-  }
+  for (const std::string& name : o.strings("gemm")) providers.push_back(parse_gemm_provider(name, "--gemm"));
   std::ostringstream csv;
   csv << "gemm,batch,pass,device_samples_per_s,device_gflops,two_ops_samples_per_s,"
          "fused_over_two_ops,host_blas_samples_per_s,host_blas_gflops,device_over_host\n";

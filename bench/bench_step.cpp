@@ -5,7 +5,6 @@
 // few profiled steps. Occupancy skipping is off (its warm-up would need a trained model): the
 // numbers are those of the dense step, the most a step costs. Built only with nova_io.
 #include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -26,14 +25,6 @@ namespace nova::bench {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream s(text);
-  for (std::string item; std::getline(s, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 // The scene with only its first K objects: the others' pixels join the background mask.
 Scene with_objects(Scene scene, int K) {
@@ -83,18 +74,11 @@ int step(const Args& args) {
                   std::to_string(scene.num_objects));
     objects.push_back(static_cast<int>(k));
   }
+  const std::vector<std::string> preset_list = o.strings("presets");
   std::vector<TrainConfig> presets;
-  for (const std::string& p : split_list(o.str("presets"))) presets.push_back(preset_config(p));
-  const std::vector<std::string> preset_list = split_list(o.str("presets"));
+  for (const std::string& p : preset_list) presets.push_back(preset_config(p));
 
-  const fs::path scratch = fs::temp_directory_path() / ("nova-bench-step-" + std::to_string(::getpid()));
-  struct Cleanup {
-    fs::path p;
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(p, ec);
-    }
-  } cleanup{scratch};
+  const ScratchDir scratch("step");
 
   Runtime rt(select_device(o.str("device")), false);
   Runtime prt(rt.info(), true);  // a profiling runtime for the per-op tables
@@ -126,9 +110,11 @@ int step(const Args& args) {
           t.run({}, warmup);
           rt.finish();
           const auto a = std::chrono::steady_clock::now();
-          t.run({}, warmup + steps);
-          rt.finish();
-          r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count() / static_cast<double>(steps);
+          // The last step's progress report comes after the device has finished it and before
+          // run() writes its closing checkpoint, which is no part of a step.
+          auto b = a;
+          t.run([&](const TrainProgress&) { b = std::chrono::steady_clock::now(); }, warmup + steps);
+          r.seconds = std::chrono::duration<double>(b - a).count() / static_cast<double>(steps);
           r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
         }
         r.rss_mb = peak_rss_mb();

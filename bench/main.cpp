@@ -3,6 +3,9 @@
 #include <cstring>
 #include <exception>
 #include <iostream>
+#include <string>
+
+#include <unistd.h>
 
 #include "bench.hpp"
 #include "nova/error.hpp"
@@ -34,6 +37,16 @@ double time_median(int repeats, const std::function<void()>& fn) {
   }
   std::sort(t.begin(), t.end());
   return t[t.size() / 2];
+}
+
+ScratchDir::ScratchDir(const std::string& what)
+    : path_(std::filesystem::temp_directory_path() / ("nova-bench-" + what + "-" + std::to_string(::getpid()))) {
+  std::filesystem::create_directories(path_);
+}
+
+ScratchDir::~ScratchDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
 }
 
 }  // namespace nova::bench

@@ -47,6 +47,14 @@ class Options {
       throw Error("--" + k + " must be an integer, got '" + values_.at(k) + "'");
     }
   }
+  // A comma-separated list, empty items dropped.
+  std::vector<std::string> strings(const std::string& k) const {
+    std::vector<std::string> out;
+    std::stringstream s(values_.at(k));
+    for (std::string item; std::getline(s, item, ',');)
+      if (!item.empty()) out.push_back(item);
+    return out;
+  }
   std::vector<long> integers(const std::string& k) const {
     std::vector<long> out;
     std::stringstream s(values_.at(k));

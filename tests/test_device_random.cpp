@@ -15,6 +15,7 @@
 #include "harness.hpp"
 #include "nova/executor.hpp"
 #include "nova/random.hpp"
+#include "random_reference.hpp"
 
 using namespace nova;
 
@@ -30,18 +31,6 @@ std::vector<float> draw(bool normal, size_t n, uint32_t seed, uint32_t stream, u
   Executor ex(test::runtime(), g);
   ex.forward();
   return ex.get(y);
-}
-
-double unit(uint32_t x, bool open0) { return (double((x >> 8) + (open0 ? 1u : 0u))) / 16777216.0; }
-
-// The float64 reference of value i.
-double reference(bool normal, size_t i, uint32_t seed, uint32_t stream, uint64_t counter, double scale) {
-  const auto r = philox4x32_10({uint32_t(i / 4), 0u, uint32_t(counter), uint32_t(counter >> 32)}, {seed, stream});
-  if (!normal) return scale * unit(r[i % 4], false);
-  const size_t pair = (i % 4) / 2;
-  const double rad = std::sqrt(-2.0 * std::log(unit(r[2 * pair], true)));
-  const double theta = 2.0 * M_PI * unit(r[2 * pair + 1], false);
-  return scale * rad * (i % 2 == 0 ? std::cos(theta) : std::sin(theta));
 }
 
 }  // namespace
@@ -64,8 +53,8 @@ BOOST_AUTO_TEST_CASE(kernels_match_the_host_generator_at_odd_sizes) {
     const auto z = draw(true, n, 9, 2, counter, 0.3f);
     std::vector<double> ru, rz;
     for (size_t i = 0; i < n; ++i) {
-      ru.push_back(reference(false, i, 9, 1, counter, 0.5));
-      rz.push_back(reference(true, i, 9, 2, counter, 0.3));
+      ru.push_back(test::random_reference(false, i, 9, 1, counter, 0.5));
+      rz.push_back(test::random_reference(true, i, 9, 2, counter, 0.3));
     }
     test::expect_close(u, ru, 0.0, 0.0, "uniform n=" + std::to_string(n));
     test::expect_close(z, rz, 2e-6, 2e-6, "normal n=" + std::to_string(n));

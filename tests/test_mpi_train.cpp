@@ -52,11 +52,14 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   const std::string scene = " --scene " + cached_tiny_scene().string();
   const CommandResult one = run_built("nova", "train --out " + (dir / "one").string() + scene + kOptions, dir);
   BOOST_TEST_REQUIRE(one.code == 0, one.err);
-  const std::string mpirun = std::string(NOVA_MPIEXEC) + " -np 2 --oversubscribe -x POCL_DEVICES -x POCL_CACHE_DIR " +
-                             "-x POCL_MAX_PTHREAD_COUNT -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM";
-  const CommandResult two =
-      run_built("nova", "train --out " + (dir / "two").string() + scene + kOptions, dir,
-                "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + mpirun);
+  // `nova ARGS` as two ranks on two PoCL devices (as root too: CI's containers run as root).
+  const auto two_ranks = [&](const std::string& args) {
+    return run_built("nova", args, dir,
+                     "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
+                         std::string(NOVA_MPIEXEC) + " -np 2 --oversubscribe -x POCL_DEVICES -x POCL_CACHE_DIR " +
+                         "-x POCL_MAX_PTHREAD_COUNT -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM");
+  };
+  const CommandResult two = two_ranks("train --out " + (dir / "two").string() + scene + kOptions);
   BOOST_TEST_REQUIRE(two.code == 0, two.err);
   BOOST_TEST(two.err.find("rank 1 of 2 on 0:1") != std::string::npos, two.err);
   const auto a = losses(dir / "one" / "metrics.jsonl"), b = losses(dir / "two" / "metrics.jsonl");
@@ -73,9 +76,7 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   fs::copy(dir / "two", dir / "eval_two", fs::copy_options::recursive);
   const CommandResult e1 = run_built("nova", "eval --run " + (dir / "eval_one").string(), dir);
   BOOST_TEST_REQUIRE(e1.code == 0, e1.err);
-  const CommandResult e2 = run_built("nova", "eval --run " + (dir / "eval_two").string(), dir,
-                                     "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 "
-                                     "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + mpirun);
+  const CommandResult e2 = two_ranks("eval --run " + (dir / "eval_two").string());
   BOOST_TEST_REQUIRE(e2.code == 0, e2.err);
   auto mean_psnr = [](const fs::path& json) {
     const std::string t = read_all(json);
@@ -91,9 +92,7 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   const std::string render = "render --run " + (dir / "two").string() + " --out ";
   const CommandResult r1 = run_built("nova", render + (dir / "render_one").string(), dir);
   BOOST_TEST_REQUIRE(r1.code == 0, r1.err);
-  const CommandResult r2 = run_built("nova", render + (dir / "render_two").string(), dir,
-                                     "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 "
-                                     "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + mpirun);
+  const CommandResult r2 = two_ranks(render + (dir / "render_two").string());
   BOOST_TEST_REQUIRE(r2.code == 0, r2.err);
   size_t files = 0;
   for (const auto& e : fs::directory_iterator(dir / "render_one")) {

@@ -40,6 +40,7 @@
 #include "nova/render.hpp"
 #include "conventions_reference.hpp"
 #include "rays_reference.hpp"
+#include "random_reference.hpp"
 #include "render_check.hpp"
 
 using namespace nova;
@@ -286,13 +287,8 @@ BOOST_AUTO_TEST_CASE(tensor_copies) {
   for (size_t b = 0; b < 3; ++b)
     for (size_t r = 0; r < kRows; ++r) rep_ref.push_back(small[b * 2]), rep_ref.push_back(small[b * 2 + 1]);
   for (size_t i = 0; i < kRows; ++i) {
-    const auto bu = philox4x32_10({uint32_t(i / 4), 0, 3, 0}, {5, 1});
-    const auto bz = philox4x32_10({uint32_t(i / 4), 0, 3, 0}, {5, 2});
-    u_ref.push_back((bu[i % 4] >> 8) / 16777216.0);
-    const size_t pair = (i % 4) / 2;
-    const double rad = std::sqrt(-2.0 * std::log(((bz[2 * pair] >> 8) + 1) / 16777216.0));
-    const double theta = 2.0 * M_PI * (bz[2 * pair + 1] >> 8) / 16777216.0;
-    z_ref.push_back(rad * (i % 2 == 0 ? std::cos(theta) : std::sin(theta)));
+    u_ref.push_back(test::random_reference(false, i, 5, 1, 3));
+    z_ref.push_back(test::random_reference(true, i, 5, 2, 3));
   }
   expect_close(rex.get(rep), rep_ref, 0, 0, "repeat_rows is an exact copy");
   expect_close(rex.get(u), u_ref, 0, 0, "random_uniform");

@@ -44,15 +44,16 @@ float unit(std::mt19937& rng) { return static_cast<float>(rng() >> 8) * (1.0f / 
 }  // namespace
 
 OccupancyEstimator::OccupancyEstimator(int objects, int resolution, float bound, float alpha)
-    : grids_(std::make_shared<std::vector<OccupancyGrid>>(static_cast<size_t>(1 + objects),
-                                                          OccupancyGrid(resolution, bound, alpha))) {}
+    : OccupancyEstimator(std::vector<OccupancyGrid>(static_cast<size_t>(1 + objects), OccupancyGrid(resolution, bound, alpha))) {}
+
+OccupancyEstimator::OccupancyEstimator(std::vector<OccupancyGrid> grids)
+    : grids_(std::make_shared<std::vector<OccupancyGrid>>(std::move(grids))) {}
 
 OccupancyEstimator::~OccupancyEstimator() = default;
 
 std::unique_ptr<OccupancyEstimator> OccupancyEstimator::from_checkpoint(const Checkpoint& ck, int objects, float bound,
                                                                         float alpha) {
-  auto e = std::make_unique<OccupancyEstimator>(0, 1, bound, alpha);
-  e->grids_->clear();
+  std::vector<OccupancyGrid> grids;
   for (int k = 0; k <= objects; ++k) {
     const std::string name = occupancy_array_name(k);
     const auto it = std::find_if(ck.arrays.begin(), ck.arrays.end(), [&](const CheckpointArray& a) { return a.name == name; });
@@ -62,11 +63,11 @@ std::unique_ptr<OccupancyEstimator> OccupancyEstimator::from_checkpoint(const Ch
     OccupancyGrid g(static_cast<int>(it->shape[0]), bound, alpha);
     g.density = it->values;
     g.refresh();
-    e->grids_->push_back(std::move(g));
+    grids.push_back(std::move(g));
   }
-  if (e->grids_->empty()) return nullptr;
-  while (static_cast<int>(e->grids_->size()) <= objects) e->grids_->emplace_back(1, bound, alpha);
-  return e;
+  if (grids.empty()) return nullptr;
+  while (static_cast<int>(grids.size()) <= objects) grids.emplace_back(1, bound, alpha);
+  return std::unique_ptr<OccupancyEstimator>(new OccupancyEstimator(std::move(grids)));
 }
 
 void OccupancyEstimator::enable_updates(Runtime& rt, const FieldConfig& field, const RayGeometry& geometry,

@@ -147,11 +147,18 @@ Buffer Runtime::sub_buffer(const Buffer& parent, size_t offset, size_t bytes) {
   return Buffer(m, bytes);
 }
 
+namespace {
+// One copy of `bytes` into the counters of TransferStats.
+void tally(size_t& count, size_t& total, size_t& largest, size_t bytes) {
+  ++count;
+  total += bytes;
+  largest = std::max(largest, bytes);
+}
+}  // namespace
+
 void Runtime::upload(cl_mem dst, const void* src, size_t bytes, size_t offset) {
   if (bytes == 0) return;
-  ++transfers_.writes;
-  transfers_.write_bytes += bytes;
-  transfers_.largest_write = std::max(transfers_.largest_write, bytes);
+  tally(transfers_.writes, transfers_.write_bytes, transfers_.largest_write, bytes);
   cl_check(clEnqueueWriteBuffer(queue_, dst, CL_TRUE, offset, bytes, src, 0, nullptr, nullptr),
            "clEnqueueWriteBuffer");
 }
@@ -165,9 +172,7 @@ void CL_CALLBACK free_staging(cl_event event, cl_int, void* block) {
 
 void Runtime::upload_async(cl_mem dst, const void* src, size_t bytes, size_t offset) {
   if (bytes == 0) return;
-  ++transfers_.writes;
-  transfers_.write_bytes += bytes;
-  transfers_.largest_write = std::max(transfers_.largest_write, bytes);
+  tally(transfers_.writes, transfers_.write_bytes, transfers_.largest_write, bytes);
   auto* block = new unsigned char[bytes];
   std::memcpy(block, src, bytes);
   cl_event done = nullptr;
@@ -194,9 +199,7 @@ void Runtime::fill_floats(cl_mem dst, float value, size_t bytes, size_t offset) 
 
 void Runtime::download(cl_mem src, void* dst, size_t bytes, size_t offset) {
   if (bytes == 0) return;
-  ++transfers_.reads;
-  transfers_.read_bytes += bytes;
-  transfers_.largest_read = std::max(transfers_.largest_read, bytes);
+  tally(transfers_.reads, transfers_.read_bytes, transfers_.largest_read, bytes);
   cl_check(clEnqueueReadBuffer(queue_, src, CL_TRUE, offset, bytes, dst, 0, nullptr, nullptr),
            "clEnqueueReadBuffer");
 }

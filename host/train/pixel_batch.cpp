@@ -1,7 +1,5 @@
 #include "nova/pixel_batch.hpp"
 
-#include <cmath>
-#include <numbers>
 #include <sstream>
 
 #include "nova/error.hpp"
@@ -9,13 +7,6 @@
 namespace nova {
 
 float uniform01(std::mt19937& rng) { return static_cast<float>(rng() >> 8) * 0x1.0p-24f; }
-
-float standard_normal(std::mt19937& rng) {
-  // 1 - u lies in (0, 1]: the logarithm stays finite.
-  const double u1 = 1.0 - static_cast<double>(rng() >> 8) * 0x1.0p-24;
-  const double u2 = static_cast<double>(rng() >> 8) * 0x1.0p-24;
-  return static_cast<float>(std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2));
-}
 
 std::vector<std::vector<uint32_t>> pixel_regions(const std::vector<Image8>& masks, const Image8* valid) {
   if (masks.empty()) throw Error("pixel_regions: no masks", kExitInternal);

@@ -96,18 +96,16 @@ void Trainer::reduce_gradients() {
   rt_.upload(exec_->gradient_arena(), g.data(), n * sizeof(float));
 }
 
-// Loss, terms, PSNR and skipped samples as the means over ranks.
-void Trainer::reduce_progress(TrainProgress& p) {
-  std::vector<float> v{static_cast<float>(p.loss), static_cast<float>(p.kept)};
+// Loss, terms, skipped samples and the PSNR's mse as the means over ranks.
+void Trainer::reduce_progress(TrainProgress& p, double& mse) {
+  std::vector<float> v{static_cast<float>(p.loss), static_cast<float>(p.kept), static_cast<float>(mse)};
   for (auto& [name, t] : p.terms) v.push_back(static_cast<float>(t));
-  v.push_back(static_cast<float>(std::pow(10.0, -p.psnr / 10.0)));
   reducer_->sum(v);
   const double inv = 1.0 / static_cast<double>(ranks());
   p.loss = v[0] * inv;
   if (p.kept >= 0) p.kept = v[1] * inv;
-  for (size_t i = 0; i < p.terms.size(); ++i) p.terms[i].second = v[2 + i] * inv;
-  const double m = v.back() * inv;
-  p.psnr = m > 0 ? -10.0 * std::log10(m) : 99.0;
+  mse = v[2] * inv;
+  for (size_t i = 0; i < p.terms.size(); ++i) p.terms[i].second = v[3 + i] * inv;
 }
 
 Trainer::~Trainer() = default;
@@ -271,9 +269,9 @@ void Trainer::train_step(bool log, TrainProgress& p) {
       p.kept = tested ? static_cast<double>(kept) / static_cast<double>(tested) : 1.0;
       p.occupied = occupancy_->occupied_fractions();
     }
-    const double m = exec_->get(graph_->psnr_mse).at(0);
+    double m = exec_->get(graph_->psnr_mse).at(0);
+    if (ranks() > 1) reduce_progress(p, m);
     p.psnr = m > 0 ? -10.0 * std::log10(m) : 99.0;
-    if (ranks() > 1) reduce_progress(p);
   }
 }
 

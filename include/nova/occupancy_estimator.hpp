@@ -53,6 +53,7 @@ class OccupancyEstimator {
   std::vector<double> occupied_fractions() const;
 
  private:
+  explicit OccupancyEstimator(std::vector<OccupancyGrid> grids);
   struct Updater;
   void update(Executor& source, bool objects, bool full, unsigned seed, long step);
 

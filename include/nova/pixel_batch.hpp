@@ -10,10 +10,9 @@
 
 namespace nova {
 
-// Uniform in [0, 1) from 24 random bits, and N(0, 1) by Box-Muller without a cached second
-// value: the same numbers on every standard library, and no distribution state to save.
+// Uniform in [0, 1) from 24 random bits: the same numbers on every standard library, and no
+// distribution state to save.
 float uniform01(std::mt19937& rng);
-float standard_normal(std::mt19937& rng);
 
 struct PixelBatch {
   std::vector<float> pixels;  // [R, 2]: column, row

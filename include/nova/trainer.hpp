@@ -101,7 +101,7 @@ class Trainer {
   bool writes_files() const { return !reducer_ || reducer_->rank() == 0; }
   RaySlice ray_slice() const;
   void reduce_gradients();
-  void reduce_progress(TrainProgress& p);
+  void reduce_progress(TrainProgress& p, double& mse);
 };
 
 }  // namespace nova
