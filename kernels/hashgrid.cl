@@ -1,14 +1,15 @@
 // Multiresolution hash encoding (Mueller et al. 2022, Instant-NGP): per level l a grid of
-// resolution res[l] over the box [-bound, bound]^D; a point's feature is the D-linear
-// interpolation of the 2^D vertices of its cell. A level whose (res + 1)^D vertices fit into
-// the table is indexed densely, a finer one through the spatial hash
+// resolution res[l] over the box [-bx, bx] x [-by, by] x [-bz, bz]; a point's feature is the
+// D-linear interpolation of the 2^D vertices of its cell. A level whose (res + 1)^D vertices
+// fit into the table is indexed densely, a finer one through the spatial hash
 // XOR_d (v_d * prime_d) mod T (T a power of two).
 //
 // Layout: positions [B, M, D]; table [B, L, T, F]; out [B, M, L * F]; res [L] (floats that
-// hold integers). With D = 4 the last coordinate is time: it spans [-1, 1] (inv_bound_t = 1)
-// at res_t[l] cells, which may be coarser than space so that the fine levels are shared by
-// neighbouring frames (a monocular video sees each time from one camera only). D (HG_DIMS, <= 4: xyz or xyzt) and F (HG_FEATURES, <= 8) are build options,
-// so the corner and feature loops unroll (3x faster on PoCL than runtime bounds).
+// hold integers); inv_bound = (1/bx, 1/by, 1/bz, 1). With D = 4 the last coordinate is time:
+// it spans [-1, 1] at res_t[l] cells, which may be coarser than space so that the fine levels
+// are shared by neighbouring frames (a monocular video sees each time from one camera only).
+// D (HG_DIMS, <= 4: xyz or xyzt) and F (HG_FEATURES, <= 8) are build options, so the corner
+// and feature loops unroll (3x faster on PoCL than runtime bounds).
 //
 // Two backwards, both bit-reproducible (exact resume): the ordered one writes the table
 // gradient without atomics, one work-item per (network, level) walking the rows in order
@@ -45,11 +46,12 @@ inline int hg_dense(uint res, uint res_t, uint table_size) {
 }
 
 // Cell and fraction of every coordinate of point p at level resolutions (res, res_t).
-inline void hg_cells(__global const float* p, float inv_bound, float inv_bound_t, float res,
-                     float res_t, uint* cell, float* frac) {
+inline void hg_cells(__global const float* p, float4 inv_bound, float res, float res_t,
+                     uint* cell, float* frac) {
+  const float inv[4] = {inv_bound.x, inv_bound.y, inv_bound.z, inv_bound.w};
   for (uint d = 0; d < HG_DIMS; ++d) {
     const int is_t = HG_DIMS == 4 && d == 3;
-    hg_cell(p[d], is_t ? inv_bound_t : inv_bound, is_t ? res_t : res, &cell[d], &frac[d]);
+    hg_cell(p[d], inv[d], is_t ? res_t : res, &cell[d], &frac[d]);
   }
 }
 
@@ -77,13 +79,12 @@ inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res
 // The table rows and weights of the 2^D vertices around point r of network b at level l.
 inline void hg_corners(__global const float* positions, uint b, uint rows, uint r, uint l,
                        __constant float* res, __constant float* res_t, uint table_size,
-                       float inv_bound, float inv_bound_t, uint* vertex, float* weight) {
+                       float4 inv_bound, uint* vertex, float* weight) {
   const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
   const int dense = hg_dense(resolution, resolution_t, table_size);
   uint cell[HG_DIMS];
   float frac[HG_DIMS];
-  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, inv_bound_t, res[l],
-           res_t[l], cell, frac);
+  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, res[l], res_t[l], cell, frac);
   for (uint c = 0; c < HG_CORNERS; ++c)
     vertex[c] = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &weight[c]);
 }
@@ -92,13 +93,13 @@ inline void hg_corners(__global const float* positions, uint b, uint rows, uint 
 __kernel void hashgrid_forward(__global const float* positions, __global const float* table,
                                __constant float* res, __constant float* res_t,
                                __global float* out, uint nets, uint rows, uint levels,
-                               uint table_size, float inv_bound, float inv_bound_t) {
+                               uint table_size, float4 inv_bound) {
   const uint i = get_global_id(0);
   if (i >= nets * levels * rows) return;
   const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
   uint v[HG_CORNERS];
   float w[HG_CORNERS];
-  hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, inv_bound_t, v, w);
+  hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, v, w);
   float acc[HG_FEATURES];
   for (uint f = 0; f < HG_FEATURES; ++f) acc[f] = 0.0f;
   __global const float* t = table + ((size_t)b * levels + l) * table_size * HG_FEATURES;
@@ -112,8 +113,7 @@ __kernel void hashgrid_forward(__global const float* positions, __global const f
 __kernel void hashgrid_backward(__global const float* positions, __global const float* dout,
                                 __constant float* res, __constant float* res_t,
                                 __global float* dtable, uint nets, uint rows, uint levels,
-                                uint table_size, float inv_bound, float inv_bound_t,
-                                int accumulate) {
+                                uint table_size, float4 inv_bound, int accumulate) {
   const uint i = get_global_id(0);
   if (i >= nets * levels) return;
   const uint l = i % levels, b = i / levels;
@@ -124,7 +124,7 @@ __kernel void hashgrid_backward(__global const float* positions, __global const 
   for (uint r = 0; r < rows; ++r) {
     uint v[HG_CORNERS];
     float w[HG_CORNERS];
-    hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, inv_bound_t, v, w);
+    hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, v, w);
     __global const float* dy = dout + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
     for (uint c = 0; c < HG_CORNERS; ++c)
       for (uint f = 0; f < HG_FEATURES; ++f) g[(size_t)v[c] * HG_FEATURES + f] += w[c] * dy[f];
@@ -174,14 +174,14 @@ __kernel void hashgrid_backward_atomic(__global const float* positions, __global
                                        __constant float* res, __constant float* res_t,
                                        __global long* acc, __global const float* absmax,
                                        uint nets, uint rows, uint levels, uint table_size,
-                                       float inv_bound, float inv_bound_t) {
+                                       float4 inv_bound) {
   const uint i = get_global_id(0);
   if (i >= nets * levels * rows) return;
   const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
   const int k = hg_fixed_exponent(absmax[0], rows);
   uint v[HG_CORNERS];
   float w[HG_CORNERS];
-  hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, inv_bound_t, v, w);
+  hg_corners(positions, b, rows, r, l, res, res_t, table_size, inv_bound, v, w);
   __global const float* dy = dout + ((size_t)b * rows + r) * levels * HG_FEATURES + l * HG_FEATURES;
   __global long* g = acc + ((size_t)b * levels + l) * table_size * HG_FEATURES;
   for (uint c = 0; c < HG_CORNERS; ++c)

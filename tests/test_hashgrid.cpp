@@ -17,6 +17,8 @@
 #include <cstdlib>
 #include <string>
 #include <utility>
+#include <tuple>
+#include <vector>
 
 #include "harness.hpp"
 #include "nova/error.hpp"
@@ -46,7 +48,7 @@ void for_each_vertex(const std::vector<float>& pos, size_t rows, size_t dims, co
       for (size_t d = 0; d < dims; ++d) {
         const bool time = d == 3;
         R[d] = time ? res_t[l] : res[l];
-        bound[d] = time ? 1.0 : c.bound;
+        bound[d] = time ? 1.0 : c.half_size(static_cast<int>(d));
       }
       double vertices = 1;
       for (size_t d = 0; d < dims; ++d) vertices *= R[d] + 1;
@@ -165,9 +167,13 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
   c.max_resolution = 40;
   c.bound = 1.5f;
   // Time (the 4th coordinate) as space, then capped at 3 cells: res 5 becomes dense
-  // (6^3 * 4 <= 1024), so the capped stride is checked on dense levels too.
-  for (auto [dims, time_cap] : {std::pair<size_t, int>{3, 0}, {4, 0}, {4, 3}}) {
+  // (6^3 * 4 <= 1024), so the capped stride is checked on dense levels too. Then a box with
+  // its own half-size per axis; positions drawn in +-1.5 also test its clamp along y and z.
+  for (auto [dims, time_cap, box] : {std::tuple<size_t, int, std::array<float, 3>>{3, 0, {}},
+                                     {4, 0, {}}, {4, 3, {}}, {3, 0, {1.4f, 0.8f, 1.1f}},
+                                     {4, 3, {1.6f, 0.9f, 1.0f}}}) {
     c.time_max_resolution = time_cap;
+    c.axis_bound = box;
     for (size_t nets : {1, 2}) {
       const size_t rows = 37;
       const size_t tsize = hash_grid_table_shape(c).numel();
@@ -181,7 +187,8 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
         const auto r = hash_reference(pb, rows, dims, tb, c);
         ref.insert(ref.end(), r.begin(), r.end());
       }
-      BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap << " networks " << nets) {
+      BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap << " networks " << nets
+                                  << " box " << c.half_size(0) << "," << c.half_size(1) << "," << c.half_size(2)) {
         const double atol = dims * 2.0 * 4.0 * c.max_resolution * std::ldexp(1.0, -24) + 2e-6;
         expect_close(out, ref, atol, 1e-6, "hash encoding");
       }
@@ -303,6 +310,7 @@ BOOST_AUTO_TEST_CASE(bad_configurations_are_refused) {
   refused([](HashGridConfig& c) { c.log2_size = 30; });
   refused([](HashGridConfig& c) { c.max_resolution = c.min_resolution - 1; });
   refused([](HashGridConfig& c) { c.bound = 0.0f; });
+  refused([](HashGridConfig& c) { c.axis_bound[1] = -1.0f; });
   refused([](HashGridConfig& c) { c.time_max_resolution = -1; });
   Graph g;
   Tensor p = g.input("p", Shape{4, 5});

@@ -94,7 +94,12 @@ BOOST_AUTO_TEST_CASE(scene_field_takes_the_box_from_the_rays_unless_told_not_to)
   BOOST_TEST(!f.ndc_box_from_rays);
   BOOST_TEST(scene_field(f, g).hash.bound == 1.0f);
   f.ndc_box_from_rays = true;
-  BOOST_TEST(scene_field(f, g).hash.bound == g.extent);
+  // Per axis: x as wide as the rays, y and z the unit box (the camera moved along x only).
+  const HashGridConfig h = scene_field(f, g).hash;
+  BOOST_TEST(h.half_size(0) == 1.25f, boost::test_tools::tolerance(1e-6f));
+  BOOST_TEST(h.half_size(1) == 1.0f);
+  BOOST_TEST(h.half_size(2) == 1.0f);
+  BOOST_TEST(h.max_half_size() == g.extent);
   f.ndc_box_from_rays = false;
   BOOST_TEST(scene_field(f, g).hash.bound == 1.0f);
   f.hash.bound = 0.7f;  // set by hand: kept

@@ -70,17 +70,18 @@ int time_axis_frames(const Scene& scene) {
   return static_cast<int>(std::lround(std::min(2.0 / gap, 1e6)));
 }
 
-// Half-size of the NDC box that holds every training ray from the near plane (NDC t = 0) to
-// infinity (t = 1). NDC is the reference camera's frustum, so a camera that moved sideways
-// sees past x, y = +-1; a box clamped at 1 would give every sample beyond it the encoding of
-// the box's face (streaks along x or y in the renders). Rays are straight lines in NDC and the
-// image corners span the frustum, so the extremes are at the corners' two ends. At least 1.
-float ndc_extent(const Scene& scene) {
+// Half-sizes along x and y of the NDC box that holds every training ray from the near plane
+// (NDC t = 0) to infinity (t = 1). NDC is the reference camera's frustum, so a camera that
+// moved sideways sees past x, y = +-1; a box clamped at 1 would give every sample beyond it
+// the encoding of the box's face (streaks along x or y in the renders). Rays are straight
+// lines in NDC and the image corners span the frustum, so the extremes are at the corners'
+// two ends. Each at least 1.
+std::array<float, 2> ndc_extent(const Scene& scene) {
   constexpr double kNear = 1.0;  // RayOptions::ndc_near
-  double extent = 1.0;
+  double extent[2] = {1.0, 1.0};
   for (const Frame& f : scene.frames) {
     const Camera& c = f.camera;
-    const double ax = -c.fx / c.cx, ay = -c.fy / c.cy;
+    const double a[2] = {-c.fx / c.cx, -c.fy / c.cy};
     for (double i : {0.0, c.width - 1.0})
       for (double j : {0.0, c.height - 1.0}) {
         const double u = (i - c.cx) / c.fx, v = -(j - c.cy) / c.fy;
@@ -92,11 +93,12 @@ float ndc_extent(const Scene& scene) {
         if (!(d[2] < 0.0)) continue;  // a ray that does not look into the scene
         const double t = -(kNear + o[2]) / d[2];
         for (int k = 0; k < 3; ++k) o[k] += t * d[k];
-        for (double x : {ax * o[0] / o[2], ay * o[1] / o[2], ax * d[0] / d[2], ay * d[1] / d[2]})
-          if (std::isfinite(x)) extent = std::max(extent, std::fabs(x));
+        for (int k = 0; k < 2; ++k)
+          for (double x : {a[k] * o[k] / o[2], a[k] * d[k] / d[2]})
+            if (std::isfinite(x)) extent[k] = std::max(extent[k], std::fabs(x));
       }
   }
-  return static_cast<float>(extent);
+  return {static_cast<float>(extent[0]), static_cast<float>(extent[1])};
 }
 
 }  // namespace
@@ -115,7 +117,9 @@ RayGeometry ray_geometry(const Scene& scene) {
     g.far = 1.0f;
     g.ax = static_cast<float>(-c.fx / c.cx);
     g.ay = static_cast<float>(-c.fy / c.cy);
-    g.extent = ndc_extent(scene);
+    const std::array<float, 2> xy = ndc_extent(scene);
+    g.box = {xy[0], xy[1], 1.0f};
+    g.extent = std::max(xy[0], xy[1]);
   } else {
     if (!(scene.far > scene.near) || scene.near < 0)
       throw Error("scene '" + scene.name + "': bounds [" + std::to_string(scene.near) + ", " +
@@ -126,6 +130,7 @@ RayGeometry ray_geometry(const Scene& scene) {
     for (const Frame& f : scene.frames)
       for (int r = 0; r < 3; ++r) extent = std::max(extent, std::fabs(f.camera.position(r)));
     g.extent = static_cast<float>(std::max(extent, 1e-3));
+    g.box = {g.extent, g.extent, g.extent};
   }
   return g;
 }
@@ -184,7 +189,10 @@ Tensor with_distortion_term(StepGraph& s, const TrainConfig& c, Tensor raw, cons
 
 FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g) {
   FieldConfig out = f;
-  if (out.hash.bound <= 0.0f) out.hash.bound = g.ndc && !f.ndc_box_from_rays ? 1.0f : g.extent;
+  if (out.hash.bound <= 0.0f) {
+    out.hash.bound = g.ndc ? 1.0f : g.extent;
+    if (g.ndc && f.ndc_box_from_rays) out.hash.axis_bound = g.box;
+  }
   if (out.hash_time_auto) {
     out.hash.time_max_resolution =
         g.frames > 0 ? std::max(1, static_cast<int>(std::lround(g.frames / kFramesPerTimeCell))) : 0;

@@ -27,7 +27,7 @@ class HashEncodingOp final : public Op {
     ctx.launch("hashgrid", "hashgrid_forward", build_options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.out(0))
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
-        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound).arg(1.0f)
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
         .run(nets_ * rows * c_.levels);
   }
 
@@ -47,7 +47,7 @@ class HashEncodingOp final : public Op {
     ctx.launch("hashgrid", "hashgrid_backward", build_options())
         .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(dtable)
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(ctx.in_rows(0, rows_), "rows"))
-        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound).arg(1.0f)
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
         .arg(static_cast<int>(ctx.accumulate_in(1)))
         .run(nets_ * c_.levels);
   }
@@ -82,7 +82,7 @@ class HashEncodingOp final : public Op {
     ctx.launch("hashgrid", "hashgrid_backward_atomic", opts)
         .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.workspace()).arg(absmax_)
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
-        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(1.0f / c_.bound).arg(1.0f)
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
         .run(nets_ * rows * c_.levels);
     ctx.launch("hashgrid", "hashgrid_backward_fixed_to_float", opts)
         .arg(ctx.workspace()).arg(absmax_).arg(dtable).arg(detail::u32(table_entries(), "table entries"))
@@ -91,6 +91,10 @@ class HashEncodingOp final : public Op {
   }
 
   unsigned table_size() const { return 1u << c_.log2_size; }
+  // 1 / the half-size of x, y, z and time (time always spans [-1, 1]).
+  cl_float4 inv_bound() const {
+    return {{1.0f / c_.half_size(0), 1.0f / c_.half_size(1), 1.0f / c_.half_size(2), 1.0f}};
+  }
   std::string build_options() const {
     return "-DHG_DIMS=" + std::to_string(dims_) + " -DHG_FEATURES=" + std::to_string(c_.features);
   }
@@ -137,6 +141,10 @@ void validate(const HashGridConfig& c) {
          std::to_string(c.min_resolution) + ", max " + std::to_string(c.max_resolution));
   if (!(c.bound > 0.0f) || !std::isfinite(c.bound))
     fail("bound must be a positive number, got " + std::to_string(c.bound));
+  for (int d = 0; d < 3; ++d)
+    if (!(c.axis_bound[d] >= 0.0f) || !std::isfinite(c.axis_bound[d]))
+      fail(std::string("half-size along ") + "xyz"[d] + " must be positive (0: bound), got " +
+           std::to_string(c.axis_bound[d]));
   if (c.time_max_resolution < 0 || c.time_max_resolution > (1 << 20))
     fail("time resolution must be in [0, 2^20] (0: as space), got " +
          std::to_string(c.time_max_resolution));

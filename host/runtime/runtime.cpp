@@ -257,6 +257,10 @@ Launch& Launch::arg(unsigned v) {
   cl_check(clSetKernelArg(kernel_, index_++, sizeof(unsigned), &v), "clSetKernelArg(uint)");
   return *this;
 }
+Launch& Launch::arg(const cl_float4& v) {
+  cl_check(clSetKernelArg(kernel_, index_++, sizeof(cl_float4), &v), "clSetKernelArg(float4)");
+  return *this;
+}
 Launch& Launch::local_floats(size_t n) {
   cl_check(clSetKernelArg(kernel_, index_++, n * sizeof(float), nullptr), "clSetKernelArg(local)");
   return *this;

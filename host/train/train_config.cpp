@@ -162,7 +162,7 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "0";
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: from the scene: NDC, the training rays' extent (see hash-ndc-box-from-rays); else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
-  o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray (more than [-1, 1] where the camera moves sideways); false: [-1, 1]",
+  o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray along x and y (more than [-1, 1] where the camera moves sideways); false: [-1, 1]^3",
                           [](TrainConfig& c) -> bool& { return c.field.ndc_box_from_rays; }));
   o.back().before = "false";
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,

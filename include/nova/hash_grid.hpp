@@ -5,6 +5,8 @@
 // features (L * features values). Coarse levels whose vertices fit the table are dense,
 // finer ones hashed. Converges in far fewer steps than the positional encoding at a fraction
 // of the MLP work, which is what makes training on two CPU cores useful.
+#include <algorithm>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -21,12 +23,18 @@ struct HashGridConfig {
   int min_resolution = 16;   // coarsest grid: cells per dimension
   int max_resolution = 512;  // finest grid
   float bound = 1.0f;        // encodes [-bound, bound]^D; points outside are clamped to it
+  // Half-sizes of x, y and z where > 0, in place of `bound`: an NDC scene whose camera moves
+  // sideways needs a box wider in x than in z, and a cube would coarsen z with it.
+  std::array<float, 3> axis_bound{};
   // With D = 4 the 4th coordinate is time, on [-1, 1] whatever `bound`, with at most this
   // many cells per level (0: as space). A monocular video sees each time from one camera:
   // time cells shared by neighbouring frames tie the object NeRFs to several viewpoints.
   int time_max_resolution = 0;
 
   int outputs() const { return levels * features; }
+  float half_size(int axis) const { return axis_bound[static_cast<size_t>(axis)] > 0.0f ? axis_bound[static_cast<size_t>(axis)] : bound; }
+  // The smallest cube that holds the box (what an occupancy grid of the field covers).
+  float max_half_size() const { return std::max({half_size(0), half_size(1), half_size(2)}); }
 };
 
 // Checks the configuration (throws nova::Error naming the field and the limit).

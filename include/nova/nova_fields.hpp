@@ -38,12 +38,10 @@ struct FieldConfig {
   // hash.time_max_resolution resolved from the scene's frames, about kFramesPerTimeCell
   // frames per cell (scene_field in nova_graphs.hpp); false: hash.time_max_resolution as set.
   bool hash_time_auto = false;
-  // In NDC, hash.bound <= 0 resolves to the half-size of the box that holds every training
-  // ray (RayGeometry::extent: more than 1 where the camera moves sideways), or with false to
-  // 1, the reference camera's frustum, which clamps what moved cameras see beyond it (streaks
-  // at the image edge). The box is a cube, so holding a wider x also coarsens y and z: on the
-  // default synthetic scene and family test seeds 101 and 102 that cost 3.5, 2.8 and 7.1 dB
-  // (docs/accuracy.md), so false is the default.
+  // In NDC, hash.bound <= 0 resolves to 1, the reference camera's frustum [-1, 1]^3; with
+  // true, x and y instead take the half-sizes of the box that holds every training ray
+  // (RayGeometry::box: more than 1 where the camera moves sideways), z stays [-1, 1]. The
+  // unit box clamps what moved cameras see beyond it (streaks at the image edge).
   bool ndc_box_from_rays = false;
   // Finest cells per dimension of the object NeRFs' hash grid (0: hash.max_resolution). An
   // object is seen from one camera per time, so fine levels it cannot constrain fill with

@@ -2,6 +2,7 @@
 // The graphs of a NOVA model: the static pretraining step, the joint training step and the
 // inference render of a view with placed object instances. The trainer and the renderer
 // both build from here, so training and inference see the same fields and the same rays.
+#include <array>
 #include <memory>
 #include <string>
 #include <utility>
@@ -23,9 +24,11 @@ struct RayGeometry {
   bool ndc = false;
   float near = 0.0f, far = 1.0f;  // sample range (NDC: 0 and 1)
   float ax = -1.0f, ay = -1.0f;   // NDC constants -fx/cx, -fy/cy of the training cameras
-  // Half-size of the box around the origin that holds what the cameras see: in NDC the extent
-  // of every training ray (at least 1), else the largest camera-origin coordinate (cameras
-  // look in at the scene).
+  // Half-sizes along x, y, z of the box around the origin that holds what the cameras see:
+  // in NDC the extent of every training ray in x and y (at least 1) and 1 in z (near plane
+  // to infinity); else the largest camera-origin coordinate on every axis (cameras look in at
+  // the scene). `extent` is the largest of the three.
+  std::array<float, 3> box{1.0f, 1.0f, 1.0f};
   float extent = 1.0f;
   int num_objects = 0;
   bool disparity = false;  // every training frame has a disparity map

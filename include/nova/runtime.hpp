@@ -104,6 +104,7 @@ class Launch {
   Launch& arg(float v);
   Launch& arg(int v);
   Launch& arg(unsigned v);
+  Launch& arg(const cl_float4& v);
   Launch& local_floats(size_t n);  // __local float[n]
   // 1D over n items; the work-group size comes from the device and kernel, the global size
   // is rounded up, and kernels guard with their own count.
