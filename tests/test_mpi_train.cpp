@@ -10,6 +10,8 @@
 #include <boost/test/unit_test.hpp>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <sstream>
 
 #include "scene_test_util.hpp"
@@ -102,6 +104,48 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   }
   BOOST_TEST(files >= 10u * 3u);  // every frame's colour, depth and masks
   BOOST_TEST(!fs::exists(dir / "render_two.partial"));
+#endif
+}
+
+BOOST_AUTO_TEST_CASE(a_rank_that_stops_answering_ends_the_job, *boost::unit_test::precondition(has_mpi)) {
+#ifdef NOVA_MPIEXEC
+  // Rank 1 is stopped (SIGSTOP: alive, so mpirun sees nothing wrong) once training runs;
+  // rank 0 then waits in its next gradient sum until the watchdog's limit (3 s here) and
+  // ends; mpirun ends the job. The script prints the exit code and the milliseconds from the
+  // stop to the job's end.
+  TempDir dir("mpi-stop");
+  std::string options = kOptions;  // trains until stopped
+  options.replace(options.find("--steps 10"), 10, "--steps 100000");
+  const fs::path run = dir / "stopped", script = dir / "stop_rank.sh";
+  {
+    std::ofstream f(script);
+    f << "\"$@\" >" << (dir / "stdout.txt").string() << " 2>" << (dir / "stderr.txt").string() << " & job=$!\n"
+      << "while kill -0 $job 2>/dev/null && [ ! -s " << (run / "metrics.jsonl").string() << " ]; do sleep 0.1; done\n"
+      << "for p in $(pgrep -f -- '--out " << run.string() << " '); do\n"
+      << "  tr '\\0' '\\n' < /proc/$p/environ 2>/dev/null | grep -qx OMPI_COMM_WORLD_RANK=1 && kill -STOP $p\n"
+      << "done\n"
+      << "start=$(date +%s%N); wait $job; code=$?\n"
+      << "echo $code $(( ($(date +%s%N) - start) / 1000000 ))\n";
+  }
+  const std::string cmd =
+      "cd " + (dir / "").string() + " && POCL_DEVICES='pthread pthread' NOVA_MPI_TIMEOUT=3 OMPI_ALLOW_RUN_AS_ROOT=1 "
+      "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 bash " + script.string() + " " + NOVA_MPIEXEC +
+      " -np 2 --oversubscribe -x POCL_DEVICES -x POCL_CACHE_DIR -x POCL_MAX_PTHREAD_COUNT -x NOVA_MPI_TIMEOUT"
+      " -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM " + NOVA_BINARY_DIR + "/nova train --out " +
+      run.string() + " --scene " + cached_tiny_scene().string() + options + " > " +
+      (dir / "result.txt").string();
+  BOOST_TEST_REQUIRE(std::system(cmd.c_str()) == 0);
+  std::istringstream result(read_all(dir / "result.txt"));
+  int code = 0;
+  long ms = -1;
+  result >> code >> ms;
+  const std::string err = read_all(dir / "stderr.txt");
+  BOOST_TEST(code != 0, err);
+  BOOST_TEST(err.find("rank 0: error: waited 3 s in a gradient sum") != std::string::npos, err);
+  BOOST_TEST_MESSAGE("the job ended " << ms << " ms after rank 1 stopped");
+  // The 3 s limit, the watchdog's 0.2 s tick and mpirun's clean-up; well under a minute.
+  BOOST_TEST(ms >= 3000);
+  BOOST_TEST(ms < 60000);
 #endif
 }
 

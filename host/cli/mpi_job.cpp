@@ -1,9 +1,16 @@
 // MpiJob (mpi_job.hpp): MPI_Init when launched by mpirun, an all-gather reducer summing in
-// rank order, and MPI_Abort for a rank that fails.
+// rank order, MPI_Abort for a rank that fails, and a watchdog for collective calls that never
+// return.
 #include "cli/mpi_job.hpp"
 
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
 #include <cstdlib>
 #include <iostream>
+#include <mutex>
+#include <thread>
 #include <vector>
 
 #include "nova/error.hpp"
@@ -37,13 +44,72 @@ void check(int rc, const char* call) {
   }
 }
 
+// Ends the process when a collective call has waited longer than the limit. A rank that
+// stops answering (alive, so mpirun sees nothing wrong) would otherwise hold every other rank
+// in its next collective call for ever; a rank that exits without MPI_Finalize makes mpirun
+// end the whole job. The thread only reads a clock: it calls no MPI function.
+class Watchdog {
+ public:
+  explicit Watchdog(int rank) : rank_(rank) {}
+  ~Watchdog() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+  void limit(double seconds) {
+    limit_s_ = seconds;
+    if (seconds > 0 && !thread_.joinable()) thread_ = std::thread([this] { watch(); });
+  }
+  // Marks the collective call `what` as waiting for the duration of a scope.
+  class Wait {
+   public:
+    Wait(Watchdog& w, const char* what) : w_(w) {
+      w_.what_ = what;
+      w_.since_ms_ = now_ms();
+    }
+    ~Wait() { w_.since_ms_ = 0; }
+
+   private:
+    Watchdog& w_;
+  };
+
+ private:
+  static long long now_ms() {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  }
+  void watch() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!wake_.wait_for(lock, std::chrono::milliseconds(200), [this] { return stop_; })) {
+      const long long since = since_ms_;
+      if (since == 0 || now_ms() - since <= static_cast<long long>(limit_s_ * 1000.0)) continue;
+      std::cerr << "nova: rank " << rank_ << ": error: waited " << limit_s_ << " s in " << what_.load()
+                << " for the other ranks (NOVA_MPI_TIMEOUT); a rank has stopped answering, ending the job"
+                << std::endl;
+      std::_Exit(kExitInternal);
+    }
+  }
+
+  int rank_;
+  double limit_s_ = 0;
+  std::atomic<long long> since_ms_{0};
+  std::atomic<const char*> what_{""};
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
 // Every rank's values gathered, then summed in rank order: the same bits on every rank.
 class MpiReducer final : public GradientReducer {
  public:
-  MpiReducer(int rank, int size) : rank_(rank), size_(size) {}
+  MpiReducer(int rank, int size, Watchdog& watchdog) : rank_(rank), size_(size), watchdog_(watchdog) {}
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   void sum(std::vector<float>& values) override {
+    const Watchdog::Wait wait(watchdog_, "a gradient sum");
     const size_t n = values.size();
     all_.resize(n * static_cast<size_t>(size_));
     check(MPI_Allgather(values.data(), static_cast<int>(n), MPI_FLOAT, all_.data(), static_cast<int>(n), MPI_FLOAT,
@@ -58,6 +124,7 @@ class MpiReducer final : public GradientReducer {
 
  private:
   int rank_, size_;
+  Watchdog& watchdog_;
   std::vector<float> all_;
 };
 
@@ -69,13 +136,21 @@ class Mpi final : public MpiJob {
     MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
     MPI_Comm_size(MPI_COMM_WORLD, &size_);
-    reducer_ = std::make_unique<MpiReducer>(rank_, size_);
+    watchdog_ = std::make_unique<Watchdog>(rank_);
+    reducer_ = std::make_unique<MpiReducer>(rank_, size_, *watchdog_);
   }
-  ~Mpi() override { MPI_Finalize(); }
+  ~Mpi() override {
+    watchdog_.reset();
+    MPI_Finalize();
+  }
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   GradientReducer& reducer() override { return *reducer_; }
-  void barrier() override { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
+  void barrier() override {
+    const Watchdog::Wait wait(*watchdog_, "a barrier");
+    check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+  }
+  void limit_waits(double seconds) override { watchdog_->limit(seconds); }
   [[noreturn]] void abort(int code) override {
     MPI_Abort(MPI_COMM_WORLD, code);
     std::exit(code);
@@ -83,6 +158,7 @@ class Mpi final : public MpiJob {
 
  private:
   int rank_ = 0, size_ = 1;
+  std::unique_ptr<Watchdog> watchdog_;
   std::unique_ptr<MpiReducer> reducer_;
 };
 #endif
@@ -116,6 +192,16 @@ int run_as_ranks(const char* command, const std::vector<std::string>& args,
     mpi->abort(kExitInternal);
   }
   return kExitInternal;  // abort() does not return
+}
+
+double training_wait_limit() {
+  const char* v = std::getenv("NOVA_MPI_TIMEOUT");
+  if (!v || !*v) return 600.0;
+  char* end = nullptr;
+  const double s = std::strtod(v, &end);
+  if (end == v || *end != '\0' || !std::isfinite(s) || s < 0)
+    throw Error(std::string("NOVA_MPI_TIMEOUT='") + v + "': expected seconds (a number >= 0; 0: no limit)", kExitUsage);
+  return s;
 }
 
 DeviceInfo rank_device(const std::string& selector) {

@@ -18,6 +18,10 @@ class MpiJob {
   virtual int size() const = 0;
   virtual GradientReducer& reducer() = 0;
   virtual void barrier() = 0;
+  // From now on, a collective call (gradient sum, barrier) that waits longer than `seconds`
+  // for the other ranks ends this rank with an error, and mpirun then ends the job: a rank
+  // that hangs (alive but stuck, e.g. in a driver) cannot hold the others forever. 0: no limit.
+  virtual void limit_waits(double seconds) = 0;
   // Ends every rank of the job (after this rank has printed its error).
   [[noreturn]] virtual void abort(int code) = 0;
 };
@@ -31,6 +35,10 @@ std::unique_ptr<MpiJob> start_mpi_job();
 // ranks would wait for it at their next collective call).
 int run_as_ranks(const char* command, const std::vector<std::string>& args,
                  int (*body)(const std::vector<std::string>&, MpiJob*));
+
+// The wait limit of a training job: NOVA_MPI_TIMEOUT (seconds, 0: none), else 600. Error
+// (exit 2) naming the variable when it is not a number >= 0.
+double training_wait_limit();
 
 // The device of this rank when none is chosen (--device, NOVA_DEVICE): the node-local rank's
 // GPU, else its CPU device, counting the node's devices of that type round-robin.

@@ -74,7 +74,10 @@ int train_rank(const Args& args, MpiJob* mpi) {
 
   if (!resume && fs::exists(out) && !fs::is_empty(out))
     throw Error("run folder '" + out + "' already exists and is not empty: pass --resume to continue it, or choose another --out");
-  if (mpi) mpi->barrier();  // every rank has checked the folder before rank 0 fills it
+  if (mpi) {
+    mpi->limit_waits(training_wait_limit());
+    mpi->barrier();  // every rank has checked the folder before rank 0 fills it
+  }
 
   Scene scene = load_training_scene(vm["scene"].as<std::string>(), config);
   const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
