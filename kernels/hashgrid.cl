@@ -24,12 +24,21 @@
 #endif
 #define HG_CORNERS (1u << HG_DIMS)
 
-// Cell and fractional position of coordinate x (in [-bound, bound], clamped) at resolution res.
-inline void hg_cell(float x, float inv_bound, float res, uint* cell, float* frac) {
-  const float u = clamp(0.5f * (x * inv_bound + 1.0f), 0.0f, 1.0f) * res;
+#ifndef HG_EXTEND
+#define HG_EXTEND 0
+#endif
+
+// Cell and fractional position of coordinate x at resolution res: clamped to the box
+// [-bound, bound], or with `extend` (hashed levels under HG_EXTEND) in cells of its own
+// beyond it, which the hash folds into the table like any other (a point inside the box gets
+// the same cell and fraction either way). Extended cells are limited to +-2^20 from the box.
+inline void hg_cell(float x, float inv_bound, float res, int extend, uint* cell, float* frac) {
+  float u = 0.5f * (x * inv_bound + 1.0f);
+  u = extend ? clamp(u, -1048576.0f, 1048576.0f) : clamp(u, 0.0f, 1.0f);
+  u *= res;
   float f = floor(u);
-  if (f > res - 1.0f) f = res - 1.0f;  // u == res: last cell, fraction 1
-  *cell = (uint)f;
+  if (!extend && f > res - 1.0f) f = res - 1.0f;  // u == res: last cell, fraction 1
+  *cell = (uint)(int)f;  // a cell before the box wraps, which the hash does not mind
   *frac = u - f;
 }
 
@@ -46,12 +55,13 @@ inline int hg_dense(uint res, uint res_t, uint table_size) {
 }
 
 // Cell and fraction of every coordinate of point p at level resolutions (res, res_t).
-inline void hg_cells(__global const float* p, float4 inv_bound, float res, float res_t,
+// Time is never extended (it lies in [-1, 1]).
+inline void hg_cells(__global const float* p, float4 inv_bound, float res, float res_t, int dense,
                      uint* cell, float* frac) {
   const float inv[4] = {inv_bound.x, inv_bound.y, inv_bound.z, inv_bound.w};
   for (uint d = 0; d < HG_DIMS; ++d) {
     const int is_t = HG_DIMS == 4 && d == 3;
-    hg_cell(p[d], inv[d], is_t ? res_t : res, &cell[d], &frac[d]);
+    hg_cell(p[d], inv[d], is_t ? res_t : res, HG_EXTEND && !dense && !is_t, &cell[d], &frac[d]);
   }
 }
 
@@ -84,7 +94,7 @@ inline void hg_corners(__global const float* positions, uint b, uint rows, uint 
   const int dense = hg_dense(resolution, resolution_t, table_size);
   uint cell[HG_DIMS];
   float frac[HG_DIMS];
-  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, res[l], res_t[l], cell, frac);
+  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, res[l], res_t[l], dense, cell, frac);
   for (uint c = 0; c < HG_CORNERS; ++c)
     vertex[c] = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &weight[c]);
 }

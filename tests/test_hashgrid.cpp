@@ -56,9 +56,13 @@ void for_each_vertex(const std::vector<float>& pos, size_t rows, size_t dims, co
       uint32_t cell[4];
       double frac[4];
       for (size_t d = 0; d < dims; ++d) {
-        const double u = std::clamp(0.5 * (pos[r * dims + d] / bound[d] + 1.0), 0.0, 1.0) * R[d];
-        const double f = std::min(std::floor(u), R[d] - 1);
-        cell[d] = static_cast<uint32_t>(f);
+        // With `extend`, hashed levels place a point beyond the box in cells of their own
+        // (a cell before it wraps modulo 2^32); time and dense levels clamp.
+        const bool extend = c.extend && !dense && d != 3;
+        const double v = 0.5 * (pos[r * dims + d] / bound[d] + 1.0);
+        const double u = (extend ? v : std::clamp(v, 0.0, 1.0)) * R[d];
+        const double f = extend ? std::floor(u) : std::min(std::floor(u), R[d] - 1);
+        cell[d] = static_cast<uint32_t>(static_cast<int64_t>(f));
         frac[d] = u - f;
       }
       for (uint32_t corner = 0; corner < (1u << dims); ++corner) {
@@ -172,8 +176,10 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
   for (auto [dims, time_cap, box] : {std::tuple<size_t, int, std::array<float, 3>>{3, 0, {}},
                                      {4, 0, {}}, {4, 3, {}}, {3, 0, {1.4f, 0.8f, 1.1f}},
                                      {4, 3, {1.6f, 0.9f, 1.0f}}}) {
+   for (bool extend : {false, true}) {
     c.time_max_resolution = time_cap;
     c.axis_bound = box;
+    c.extend = extend;
     for (size_t nets : {1, 2}) {
       const size_t rows = 37;
       const size_t tsize = hash_grid_table_shape(c).numel();
@@ -188,12 +194,47 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
         ref.insert(ref.end(), r.begin(), r.end());
       }
       BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap << " networks " << nets
-                                  << " box " << c.half_size(0) << "," << c.half_size(1) << "," << c.half_size(2)) {
+                                  << " box " << c.half_size(0) << "," << c.half_size(1) << "," << c.half_size(2)
+                                  << " extend " << extend) {
         const double atol = dims * 2.0 * 4.0 * c.max_resolution * std::ldexp(1.0, -24) + 2e-6;
         expect_close(out, ref, atol, 1e-6, "hash encoding");
       }
     }
+   }
   }
+}
+
+BOOST_AUTO_TEST_CASE(extend_changes_only_points_outside_the_box) {
+  // Inside the box both modes read the same vertices with the same weights, bit for bit;
+  // outside, hashed levels differ (their own cells) while dense levels still clamp.
+  HashGridConfig c;
+  c.levels = 4;
+  c.features = 2;
+  c.log2_size = 11;
+  c.min_resolution = 4;
+  c.max_resolution = 64;  // levels 4 and 10 dense (<= 2048 vertices), 25 and 64 hashed
+  const size_t rows = 64, L = 4, F = 2;
+  std::vector<float> pos = test_positions(rows, 3, 1.0f, 11);
+  // Even rows inside the box (test_positions draws +-1.3 b), odd rows beyond x = 1.
+  for (size_t r = 0; r < rows; ++r)
+    for (size_t d = 0; d < 3; ++d) {
+      float& x = pos[r * 3 + d];
+      x = std::clamp(x, -1.0f, 1.0f);
+      if (d == 0 && r % 2) x = 1.2f + 0.01f * static_cast<float>(r);
+    }
+  const auto table = random_floats(hash_grid_table_shape(c).numel(), -1, 1, 12);
+  const auto clamped = run_encoding(pos, table, 1, rows, 3, c);
+  c.extend = true;
+  const auto extended = run_encoding(pos, table, 1, rows, 3, c);
+  size_t outside_differs = 0;
+  for (size_t r = 0; r < rows; ++r)
+    for (size_t l = 0; l < L; ++l)
+      for (size_t f = 0; f < F; ++f) {
+        const size_t i = (r * L + l) * F + f;
+        if (r % 2 == 0 || l < 2) BOOST_TEST(clamped[i] == extended[i], "row " << r << " level " << l);
+        else outside_differs += clamped[i] != extended[i];
+      }
+  BOOST_TEST(outside_differs > rows / 2);  // nearly every outside point's hashed features move
 }
 
 BOOST_AUTO_TEST_CASE(table_gradient) {
@@ -205,12 +246,15 @@ BOOST_AUTO_TEST_CASE(table_gradient) {
   c.log2_size = 4;
   c.min_resolution = 2;
   c.max_resolution = 7;
+  // The last case extends the hashed levels: test_positions puts some points beyond the box.
   for_each_backward([&](const std::string&) {
-  for (auto [dims, time_cap] : {std::pair<size_t, int>{3, 0}, {4, 0}, {4, 2}}) {
+  for (auto [dims, time_cap, extend] : {std::tuple<size_t, int, bool>{3, 0, false}, {4, 0, false}, {4, 2, false},
+                                        {4, 2, true}}) {
     c.time_max_resolution = time_cap;
+    c.extend = extend;
     const size_t nets = 2, rows = 23;
     const size_t tsize = hash_grid_table_shape(c).numel();
-    BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap) {
+    BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap << " extend " << extend) {
       check_gradients(
           [&](Graph& g) {
             Tensor p = g.input("p", Shape{nets, rows, dims});

@@ -464,7 +464,7 @@ BOOST_AUTO_TEST_CASE(default_pivot_falls_back_to_the_origin) {
   for (int k = 1; k <= scene.num_objects; ++k) {
     BOOST_TEST_CONTEXT("object " << k) {
       const CheckpointArray& a = g.checkpoint.array(occupancy_array_name(k));
-      OccupancyGrid grid(static_cast<int>(a.shape[0]), scene_field(g.config.field, geo).hash.max_half_size(),
+      OccupancyGrid grid(static_cast<int>(a.shape[0]), scene_field(g.config.field, geo).occupancy_bound,
                          g.config.occupancy_alpha);
       grid.density = a.values;
       grid.refresh();

@@ -193,6 +193,8 @@ FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g) {
     out.hash.bound = g.ndc ? 1.0f : g.extent;
     if (g.ndc && f.ndc_box_from_rays) out.hash.axis_bound = g.box;
   }
+  if (out.occupancy_bound <= 0.0f)
+    out.occupancy_bound = out.hash.extend ? std::max(out.hash.max_half_size(), g.extent) : out.hash.max_half_size();
   if (out.hash_time_auto) {
     out.hash.time_max_resolution =
         g.frames > 0 ? std::max(1, static_cast<int>(std::lround(g.frames / kFramesPerTimeCell))) : 0;

@@ -91,7 +91,7 @@ const Centroid& ViewRenderer::object_centre(int object, double time) {
   if (const auto it = centres_.find(key); it != centres_.end()) return it->second;
   if (!has_objects_) return centres_[key];  // a pretraining checkpoint: no object has density
   const FieldConfig f = scene_field(config_.field, geometry_);
-  const float bound = f.hash.max_half_size();  // the occupancy grids' cube
+  const float bound = f.occupancy_bound;  // the occupancy grids' cube
   // Which cells to probe: the object's occupied grid cells (its grid holds the maximum over
   // time, so every cell with density at `time` is among them), or all of a default grid.
   const OccupancyGrid* grid = grids_ && static_cast<int>(grids_->size()) > object
@@ -177,7 +177,7 @@ ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeom
     if (a.name.rfind(kObjectPrefix, 0) == 0) has_objects_ = true;
   if (config.occupancy) {
     saved_ = OccupancyEstimator::from_checkpoint(checkpoint, geometry.num_objects,
-                                                 scene_field(config.field, geometry).hash.max_half_size(), config.occupancy_alpha);
+                                                 scene_field(config.field, geometry).occupancy_bound, config.occupancy_alpha);
     if (saved_) grids_ = saved_grids_ = saved_->grids();
   }
   const long rows = std::max<long>(config.samples, (1L << 24) / std::max(64, config.field.width));

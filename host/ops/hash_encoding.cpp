@@ -96,7 +96,8 @@ class HashEncodingOp final : public Op {
     return {{1.0f / c_.half_size(0), 1.0f / c_.half_size(1), 1.0f / c_.half_size(2), 1.0f}};
   }
   std::string build_options() const {
-    return "-DHG_DIMS=" + std::to_string(dims_) + " -DHG_FEATURES=" + std::to_string(c_.features);
+    return "-DHG_DIMS=" + std::to_string(dims_) + " -DHG_FEATURES=" + std::to_string(c_.features) +
+           (c_.extend ? " -DHG_EXTEND=1" : "");
   }
   void upload_resolutions(Runtime& rt) {
     if (!res_buffer_.get()) res_buffer_ = rt.upload_floats(res_);

@@ -165,6 +165,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray along x and y (more than [-1, 1] where the camera moves sideways); false: [-1, 1]^3",
                           [](TrainConfig& c) -> bool& { return c.field.ndc_box_from_rays; }));
   o.back().before = "false";
+  o.push_back(bool_option("hash-extend", "hash grid: fine (hashed) levels encode points outside the box in cells of their own instead of clamping them to its face",
+                          [](TrainConfig& c) -> bool& { return c.field.hash.extend; }));
+  o.back().before = "false";
   o.push_back(int_option("rays", "rays per step, split evenly over the background and each object", 1, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.rays; }));
   o.push_back(int_option("samples", "stratified samples per ray", 2, 1024, [](TrainConfig& c) -> int& { return c.samples; }));

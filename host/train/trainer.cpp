@@ -67,7 +67,7 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
   if (config_.occupancy) {
     occupancy_ = std::make_unique<OccupancyEstimator>(geometry_.num_objects, config_.occupancy_res,
-                                                      scene_field(config_.field, geometry_).hash.max_half_size(),
+                                                      scene_field(config_.field, geometry_).occupancy_bound,
                                                       config_.occupancy_alpha);
     std::vector<double> times;
     for (const Frame& f : scene.frames) times.push_back(f.time);

@@ -26,6 +26,10 @@ struct HashGridConfig {
   // Half-sizes of x, y and z where > 0, in place of `bound`: an NDC scene whose camera moves
   // sideways needs a box wider in x than in z, and a cube would coarsen z with it.
   std::array<float, 3> axis_bound{};
+  // Hashed levels encode a point outside the box in cells of their own beyond it instead of
+  // clamping it to the box's face (which streaks whatever lies there); dense levels, whose
+  // table holds exactly the box's vertices, still clamp. Points inside encode as without.
+  bool extend = false;
   // With D = 4 the 4th coordinate is time, on [-1, 1] whatever `bound`, with at most this
   // many cells per level (0: as space). A monocular video sees each time from one camera:
   // time cells shared by neighbouring frames tie the object NeRFs to several viewpoints.

@@ -43,6 +43,10 @@ struct FieldConfig {
   // (RayGeometry::box: more than 1 where the camera moves sideways), z stays [-1, 1]. The
   // unit box clamps what moved cameras see beyond it (streaks at the image edge).
   bool ndc_box_from_rays = false;
+  // Half-size of the cube the occupancy grids cover, resolved by scene_field (0 until then):
+  // the hash grid's box, or with hash.extend every training ray's extent, so that what the
+  // extended levels encode beyond the box has cells of its own to be found occupied in.
+  float occupancy_bound = 0.0f;
   // Finest cells per dimension of the object NeRFs' hash grid (0: hash.max_resolution). An
   // object is seen from one camera per time, so fine levels it cannot constrain fill with
   // hash-collision noise when it is viewed from elsewhere.
