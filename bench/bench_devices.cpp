@@ -7,6 +7,8 @@
 //   - its error: outputs and every parameter gradient at --check-rows rows against a float64
 //     host evaluation of the same network and weights (largest difference over the largest
 //     reference value);
+//   - the compositing op (render_composite) of 1 + 2 NeRFs at --composite-rays rays x 64
+//     samples, forward + backward: samples/s (median of --repeats);
 //   - a short fixed training of a scene (the tiny synthetic scene unless --scene): seconds
 //     per step after the first, device memory of the joint step, seconds per rendered camera-0 view, camera-0
 //     PSNR, and its difference from the first device that trained.
@@ -28,6 +30,7 @@
 #include <sstream>
 
 #include "bench.hpp"
+#include "composite_problem.hpp"
 #include "nova/evaluation.hpp"
 #include "nova/executor.hpp"
 #include "nova/image_io.hpp"
@@ -189,6 +192,13 @@ int run_one(const Options& o) {
   const auto [eo, eg] = mlp_error(rt, static_cast<size_t>(o.integer("check-rows")), depth, width);
   put("mlp_out_err", num(eo));
   put("mlp_grad_err", num(eg));
+  put("stage", "compositing");
+  {
+    CompositeProblem p(rt, 3, static_cast<size_t>(o.integer("composite-rays")), 64);
+    const int repeats = static_cast<int>(o.integer("repeats"));
+    const double secs = p.forward_seconds(repeats) + p.backward_seconds(repeats);
+    put("composite_samples_s", num(static_cast<double>(p.rays() * p.samples()) / secs));
+  }
 
   put("stage", "training");
   TrainConfig c = preset_config("quick");
@@ -243,13 +253,13 @@ std::string get(const Result& r, const std::string& k) {
 
 int devices(const Args& args) {
   const Options o(args, {{"devices", "all"}, {"batch", "16384"}, {"depth", "8"}, {"width", "256"}, {"repeats", "3"},
-                         {"check-rows", "256"}, {"scene", ""}, {"pretrain-steps", "100"}, {"steps", "100"},
+                         {"check-rows", "256"}, {"composite-rays", "16384"}, {"scene", ""}, {"pretrain-steps", "100"}, {"steps", "100"},
                          {"out", "devices"}, {"one", ""}, {"result", ""}});
   if (o.help()) {
     std::cout << o.usage("nova-bench devices") << "\n--devices: all, or ids/names separated by ','\n";
     return 0;
   }
-  for (const char* k : {"batch", "depth", "width", "repeats", "check-rows"})
+  for (const char* k : {"batch", "depth", "width", "repeats", "check-rows", "composite-rays"})
     if (o.integer(k) < 1) throw Error(std::string("--") + k + " must be >= 1");
   if (o.integer("pretrain-steps") < 0 || o.integer("steps") < 1 || o.integer("pretrain-steps") + o.integer("steps") < 2)
     throw Error("--pretrain-steps must be >= 0, --steps >= 1, and the two at least 2 (the first step is not timed)");
@@ -283,7 +293,7 @@ int devices(const Args& args) {
     const fs::path res = work / ("device-" + d.id() + ".txt"), err = work / ("device-" + d.id() + ".err");
     std::ostringstream cmd;
     cmd << "'" << self << "' devices --one " << d.id() << " --result '" << res.string() << "' --scene '" << scene << "'";
-    for (const char* k : {"batch", "depth", "width", "repeats", "check-rows", "pretrain-steps", "steps"})
+    for (const char* k : {"batch", "depth", "width", "repeats", "check-rows", "composite-rays", "pretrain-steps", "steps"})
       cmd << " --" << k << " " << o.integer(k);
     cmd << " > /dev/null 2> '" << err.string() << "'";
     std::cerr << "device " << d.id() << " (" << d.name << ") ..." << std::endl;
@@ -315,7 +325,8 @@ int devices(const Args& args) {
   const std::vector<std::pair<std::string, std::string>> cols = {
       {"name", "device"}, {"driver", "driver"}, {"units", "CUs"}, {"memory_mb", "memory MB"},
       {"mlp_samples_s", "MLP samples/s"}, {"mlp_gflops", "MLP GFLOP/s"}, {"mlp_out_err", "MLP output err"},
-      {"mlp_grad_err", "MLP gradient err"}, {"train_s_per_step", "train s/step"}, {"device_mb", "step device MB"},
+      {"mlp_grad_err", "MLP gradient err"}, {"composite_samples_s", "composite samples/s"},
+      {"train_s_per_step", "train s/step"}, {"device_mb", "step device MB"},
       {"view_s", "render s/view"},
       {"psnr", "camera-0 PSNR"}, {"psnr_diff", "PSNR - first"}, {"status", "status"}};
   auto shown = [](const std::string& k, const std::string& v) {
@@ -323,7 +334,7 @@ int devices(const Args& args) {
     std::ostringstream s;
     const double x = std::stod(v);
     if (k.find("err") != std::string::npos) s << std::scientific << std::setprecision(1) << x;
-    else s << std::fixed << std::setprecision(k == "mlp_samples_s" || k == "device_mb" ? 0 : k == "train_s_per_step" || k == "view_s" ? 3 : 2) << x;
+    else s << std::fixed << std::setprecision(k == "mlp_samples_s" || k == "composite_samples_s" || k == "device_mb" ? 0 : k == "train_s_per_step" || k == "view_s" ? 3 : 2) << x;
     return s.str();
   };
   std::ostringstream md, csv, json;
@@ -368,6 +379,8 @@ int devices(const Args& args) {
   for (const auto& [d, r] : rows) {
     BarGroup s{d.id(), {}}, e{d.id(), {}};
     if (!get(r, "mlp_gflops").empty()) s.bars.push_back({"MLP GFLOP/s", std::stod(get(r, "mlp_gflops"))});
+    if (!get(r, "composite_samples_s").empty())
+      s.bars.push_back({"composite Msamples/s", std::stod(get(r, "composite_samples_s")) * 1e-6});
     if (!get(r, "train_s_per_step").empty()) s.bars.push_back({"training steps/s x 10", 10.0 / std::stod(get(r, "train_s_per_step"))});
     if (!get(r, "psnr").empty()) e.bars.push_back({"camera-0 PSNR dB", std::stod(get(r, "psnr"))});
     speed.push_back(s);

@@ -2,17 +2,14 @@
 // backward, for 1 + K NeRFs at 65536 rays x 64 samples, beside a plain single-threaded C++
 // loop of the same maths in the same run (and a check that both give the same numbers).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
-#include <random>
 #include <sstream>
 
 #include "bench.hpp"
-#include "nova/executor.hpp"
-#include "nova/ops.hpp"
-#include "nova/render.hpp"
+#include "composite_problem.hpp"
+#include "nova/runtime.hpp"
 #include "options.hpp"
 
 namespace nova::bench {
@@ -133,10 +130,6 @@ struct HostRender {
   }
 };
 
-double seconds_since(std::chrono::steady_clock::time_point a) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
-}
-
 double max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
   double m = 0;
   for (size_t i = 0; i < a.size(); ++i) m = std::max(m, static_cast<double>(std::fabs(a[i] - b[i])));
@@ -168,55 +161,14 @@ int render(const Args& args) {
 
   for (long K : o.integers("objects")) {
     const size_t N = static_cast<size_t>(K) + 1;
-    // Plausible raw fields: rgb and blend logits in [-3, 3], sigma in [-1, 4].
-    std::mt19937 rng(1);
-    std::uniform_real_distribution<float> u(-3, 3), us(-1, 4);
-    std::vector<float> raw(N * R * S * 5), delta(R * S), z(R * S);
-    for (size_t e = 0; e < raw.size(); ++e) raw[e] = e % 5 == 3 ? us(rng) : u(rng);
-    for (size_t e = 0; e < R * S; ++e) {
-      delta[e] = e % S + 1 == S ? 1e10f : 1.0f / S;
-      z[e] = static_cast<float>(e % S) / S;
-    }
-    Graph g;
-    Tensor traw = g.input("raw", Shape{N, R * S, 5}, true), td = g.input("delta", Shape{R, S}),
-           tz = g.input("z", Shape{R, S}), target = g.input("target", Shape{R, 3}),
-           tmask = g.input("masks", Shape{N, R});
-    RenderOutputs out = render_composite(traw, td, tz);
-    g.keep(out.rgb);
-    g.keep(out.mask);
-    // The losses that train through the render: colour and masks.
-    g.set_loss(weighted_sum({mse(out.rgb, target), mse(out.mask, tmask)}, {1.0f, 1.0f}));
-    Executor ex(rt, g);
-    ex.set(traw, raw);
-    ex.set(td, delta);
-    ex.set(tz, z);
-    ex.set(target, std::vector<float>(R * 3, 0.5f));
-    ex.set(tmask, std::vector<float>(N * R, 0.5f));
-
-    const double dev_fwd = time_median(repeats, [&] {
-      ex.forward();
-      rt.finish();
-    });
-    // Backward alone: a forward before each timed backward.
-    std::vector<double> bt;
-    for (int i = 0; i <= repeats; ++i) {
-      ex.forward();
-      rt.finish();
-      const auto a = std::chrono::steady_clock::now();
-      ex.backward();
-      rt.finish();
-      if (i > 0) bt.push_back(seconds_since(a));  // the first is the warm-up
-    }
-    std::sort(bt.begin(), bt.end());
-    const double dev_bwd = bt[bt.size() / 2];
-    ex.forward();
-    const auto dev_rgb = ex.get(out.rgb), dev_mask = ex.get(out.mask);
-    ex.backward();
-    const auto dev_grad = ex.get_grad(traw);
+    CompositeProblem problem(rt, N, R, S);
+    const double dev_fwd = problem.forward_seconds(repeats), dev_bwd = problem.backward_seconds(repeats);
+    const CompositeProblem::Outputs dev = problem.run();
+    const std::vector<float>& raw = problem.raw();
 
     // The host loop, with the upstream gradients mse gives: 2/n (out - target).
     HostRender host{static_cast<int>(N), static_cast<int>(R), static_cast<int>(S), raw.data(),
-                    delta.data(), z.data()};
+                    problem.delta().data(), problem.z().data()};
     std::vector<float> rgb(R * 3), nerf_rgb(N * R * 3), mask(N * R), depth(R), acc(R);
     const double host_fwd = time_median(repeats, [&] {
       host.forward(rgb.data(), nerf_rgb.data(), mask.data(), depth.data(), acc.data());
@@ -226,10 +178,10 @@ int render(const Args& args) {
     for (size_t e = 0; e < g_mask.size(); ++e) g_mask[e] = 2.0f / (N * R) * (mask[e] - 0.5f);
     const double host_bwd = time_median(repeats, [&] { host.backward(g_rgb.data(), g_mask.data(), g_raw.data()); });
 
-    const double fwd_diff = std::max(max_abs_diff(dev_rgb, rgb), max_abs_diff(dev_mask, mask));
+    const double fwd_diff = std::max(max_abs_diff(dev.rgb, rgb), max_abs_diff(dev.mask, mask));
     double gscale = 1e-30;
     for (float x : g_raw) gscale = std::max(gscale, static_cast<double>(std::fabs(x)));
-    const double bwd_diff = max_abs_diff(dev_grad, g_raw) / gscale;  // relative to the largest
+    const double bwd_diff = max_abs_diff(dev.grad_raw, g_raw) / gscale;  // relative to the largest
     const double total = static_cast<double>(R * S);
     for (int pass = 0; pass < 2; ++pass) {
       const double d = total / (pass ? dev_bwd : dev_fwd), h = total / (pass ? host_bwd : host_fwd);

@@ -39,7 +39,8 @@ std::vector<std::map<std::string, std::string>> csv_rows(const fs::path& p) {
   return rows;
 }
 
-const std::string kSmall = " --batch 1024 --depth 2 --width 32 --repeats 1 --check-rows 16 --pretrain-steps 10 --steps 10";
+const std::string kSmall =
+    " --batch 1024 --depth 2 --width 32 --repeats 1 --check-rows 16 --composite-rays 512 --pretrain-steps 10 --steps 10";
 
 }  // namespace
 
@@ -58,6 +59,7 @@ BOOST_AUTO_TEST_CASE(two_pocl_devices_side_by_side, *boost::unit_test::precondit
     BOOST_TEST(std::stod(row.at("mlp_out_err")) < 1e-5);
     BOOST_TEST(std::stod(row.at("mlp_grad_err")) < 1e-5);
     BOOST_TEST(std::stod(row.at("mlp_samples_s")) > 0.0);
+    BOOST_TEST(std::stod(row.at("composite_samples_s")) > 0.0);
     BOOST_TEST(std::stod(row.at("psnr")) > 5.0);
     BOOST_TEST(std::stod(row.at("view_s")) > 0.0);
     BOOST_TEST(!row.at("psnr_diff").empty());
@@ -80,7 +82,7 @@ BOOST_AUTO_TEST_CASE(a_failing_device_is_a_row, *boost::unit_test::precondition(
 
 BOOST_AUTO_TEST_CASE(bad_options_are_refused, *boost::unit_test::precondition([](auto) { return has_bench(); })) {
   TempDir dir("bench-devices-bad");
-  for (const std::string& args : {std::string("--batch 0"), std::string("--devices 7:7"),
+  for (const std::string& args : {std::string("--batch 0"), std::string("--composite-rays 0"), std::string("--devices 7:7"),
                                  "--scene " + (dir / "missing").string()}) {
     const CommandResult r = run_devices(args + " --out " + (dir / "out").string(), dir);
     BOOST_TEST(r.code == 2, args << ": " << r.err);
