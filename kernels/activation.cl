@@ -10,10 +10,9 @@ inline float act_forward(float x) {
 #if ACT == 1
   return fmax(x, 0.0f);
 #elif ACT == 2
-  return 1.0f / (1.0f + exp(-x));
+  return NOVA_SIGMOID(x);
 #elif ACT == 3
-  // log(1 + e^x) without overflow for large x or underflow to 0 for very negative x.
-  return fmax(x, 0.0f) + log1p(exp(-fabs(x)));
+  return NOVA_SOFTPLUS(x);
 #else
   return x;
 #endif

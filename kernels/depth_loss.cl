@@ -92,7 +92,6 @@ __kernel void depth_loss_backward(__global const float* p, __global const float*
 // Unlike the depth loss on the expected depth, this sees a haze in front of a surface even
 // where the expected depth is right, and unlike the distortion loss it sees a compact layer
 // at the wrong depth. Layout as kernels/distortion.cl (raw [N, R*S, C], sigma in channel 3).
-inline float fs_alpha(float s, float d) { return -expm1(-fmax(s, 0.0f) * d); }
 
 // h of sample depth zi for the surface at zs (= z*_r): distance beyond the margin, in front
 // with weight 1 and behind with weight `behind`.
@@ -151,7 +150,7 @@ __kernel void free_space_partial(__global const float* raw, __global const float
   float T = 1.0f, L = 0.0f;
   for (uint i = 0; i < S; ++i) {
     const size_t e = (size_t)n * R * S + (size_t)r * S + i;
-    const float a = fs_alpha(raw[e * C + 3] + (use_noise ? noise[e] : 0.0f),
+    const float a = nova_alpha(raw[e * C + 3] + (use_noise ? noise[e] : 0.0f),
                              delta[n * delta_stride + r * S + i]);
     L += T * a * fs_cost(zs, z[(size_t)r * S + i], margin, behind);
     T *= 1.0f - a;
@@ -184,7 +183,7 @@ __kernel void free_space_backward(__global const float* raw, __global const floa
   float T = 1.0f;
   for (uint i = 0; i < S; ++i) {
     ts[i] = T;
-    T *= 1.0f - fs_alpha(raw[(first_e + i) * C + 3] + (use_noise ? noise[first_e + i] : 0.0f),
+    T *= 1.0f - nova_alpha(raw[(first_e + i) * C + 3] + (use_noise ? noise[first_e + i] : 0.0f),
                          delta[n * delta_stride + r * S + i]);
   }
   float A = 0.0f;
@@ -192,8 +191,8 @@ __kernel void free_space_backward(__global const float* raw, __global const floa
     const size_t e = first_e + k;
     const float s = raw[e * C + 3] + (use_noise ? noise[e] : 0.0f);
     const float d = delta[n * delta_stride + r * S + k];
-    const float a = fs_alpha(s, d), h = fs_cost(zs, z[(size_t)r * S + k], margin, behind);
-    const float ex = exp(-fmax(s, 0.0f) * d);
+    const float a = nova_alpha(s, d), h = fs_cost(zs, z[(size_t)r * S + k], margin, behind);
+    const float ex = nova_transmittance(s, d);
     // d alpha / d raw = delta exp(-sigma delta) above the ReLU; 0 once exp underflows.
     const float dsig = s > 0.0f && ex > 0.0f && coef != 0.0f ? coef * ts[k] * (h - A) * ex * d : 0.0f;
     for (uint c = 0; c < C; ++c) {

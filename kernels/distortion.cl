@@ -12,7 +12,6 @@
 // NeRFs below `first` are left out (their gradient is 0). One work-item per (NeRF, ray): S is
 // small and the walk is sequential.
 
-inline float dl_alpha(float s, float d) { return -expm1(-fmax(s, 0.0f) * d); }
 
 inline float dl_u(__global const float* zr, uint i, uint S) {
   const float span = zr[S - 1] - zr[0];
@@ -38,7 +37,7 @@ __kernel void distortion_partial(__global const float* raw, __global const float
   for (uint i = 0; i < S; ++i) {
     const size_t e = (size_t)n * R * S + (size_t)r * S + i;
     const float s = raw[e * C + 3] + (use_noise ? noise[e] : 0.0f);
-    const float a = dl_alpha(s, delta[n * delta_stride + r * S + i]);
+    const float a = nova_alpha(s, delta[n * delta_stride + r * S + i]);
     const float w = T * a, u = dl_u(zr, i, S);
     L += w * (u * W - WU);
     W += w;
@@ -72,7 +71,7 @@ __kernel void distortion_backward(__global const float* raw, __global const floa
   float T = 1.0f, W = 0.0f, WU = 0.0f;
   for (uint i = 0; i < S; ++i) {
     const float s = raw[(first + i) * C + 3] + (use_noise ? noise[first + i] : 0.0f);
-    const float a = dl_alpha(s, delta[n * delta_stride + r * S + i]);
+    const float a = nova_alpha(s, delta[n * delta_stride + r * S + i]);
     ts[i] = T;
     ws[i] = T * a;
     W += T * a;
@@ -85,11 +84,11 @@ __kernel void distortion_backward(__global const float* raw, __global const floa
     const size_t e = first + k;
     const float s = raw[e * C + 3] + (use_noise ? noise[e] : 0.0f);
     const float d = delta[n * delta_stride + r * S + k];
-    const float a = dl_alpha(s, d);
+    const float a = nova_alpha(s, d);
     const float u = dl_u(zr, k, S), w = ws[k];
     const float W_before = W - W_after - w, WU_before = WU - WU_after - w * u;
     const float g = 2.0f * (u * W_before - WU_before + WU_after - u * W_after);
-    const float t = exp(-fmax(s, 0.0f) * d);
+    const float t = nova_transmittance(s, d);
     // d alpha / d raw = delta exp(-sigma delta) above the ReLU; 0 once exp underflows.
     const float dsig = s > 0.0f && t > 0.0f ? coef * ts[k] * (g - A) * t * d : 0.0f;
     for (uint c = 0; c < C; ++c) {

@@ -17,18 +17,17 @@
 // The epilogue of a dense layer's forward, y = act(v + bias[column]), where v is the finished
 // alpha op(A) op(B) + beta C (never a partial sum of a split reduction). GEMM_BIAS_ACT (a build
 // option) turns it on and names the activation as activation.cl's ACT does: 0 identity,
-// 1 ReLU, 2 sigmoid, 3 softplus. The expressions are activation.cl's act_forward, repeated
-// here because a family is one source (test_dense checks that the fused and the two-pass
-// results agree). The bias is added in a statement of its own so that the compiler cannot
+// 1 ReLU, 2 sigmoid, 3 softplus, with the prelude's expressions as activation.cl's
+// act_forward (test_dense checks that the fused and the two-pass results agree). The bias is added in a statement of its own so that the compiler cannot
 // contract it with alpha * acc into one fma: the rounding stays that of the two-pass path.
 // GEMM_ACT works on float and floatn alike.
 #ifdef GEMM_BIAS_ACT
 #if GEMM_BIAS_ACT == 1
 #define GEMM_ACT(x) fmax(x, 0.0f)
 #elif GEMM_BIAS_ACT == 2
-#define GEMM_ACT(x) (1.0f / (1.0f + exp(-(x))))
+#define GEMM_ACT(x) NOVA_SIGMOID(x)
 #elif GEMM_BIAS_ACT == 3
-#define GEMM_ACT(x) (fmax(x, 0.0f) + log1p(exp(-fabs(x))))
+#define GEMM_ACT(x) NOVA_SOFTPLUS(x)
 #else
 #define GEMM_ACT(x) (x)
 #endif

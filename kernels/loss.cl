@@ -42,8 +42,6 @@ __kernel void scalar_axpy(__global const float* x, __global float* out, float w,
 // Raw field rows are [rgb(3), sigma, blend, ...] of C channels (kRaw* in render.hpp); `act`
 // says whether the blend channel still needs its sigmoid.
 
-inline float loss_blend(float raw, int act) { return act ? 1.0f / (1.0f + exp(-raw)) : raw; }
-inline float loss_blend_slope(float b, int act) { return act ? b * (1.0f - b) : 1.0f; }
 
 // Masked squared error, pred [G, R, K], target [R, K], mask [G, R]:
 // partial[p] = sum over elements e = p, p + parts, ... of mask (pred - target)^2.
@@ -81,7 +79,7 @@ __kernel void blend_sum_partial(__global const float* raw, __global float* parti
   float s = 0.0f;
   for (uint m = p; m < M; m += parts) {
     float b = 0.0f;
-    for (uint n = 0; n < N; ++n) b += loss_blend(raw[((size_t)n * M + m) * C + 4], act);
+    for (uint n = 0; n < N; ++n) b += nova_blend(raw[((size_t)n * M + m) * C + 4], act);
     s += fabs(b - 1.0f);
   }
   partial[p] = s;
@@ -98,9 +96,9 @@ __kernel void blend_sum_backward(__global const float* raw, __global const float
   if (e % C == 4) {
     const uint m = (e / C) % M;
     float b = 0.0f;
-    for (uint n = 0; n < N; ++n) b += loss_blend(raw[((size_t)n * M + m) * C + 4], act);
-    const float mine = loss_blend(raw[e], act);
-    g = gloss[0] * scale * sign(b - 1.0f) * loss_blend_slope(mine, act);
+    for (uint n = 0; n < N; ++n) b += nova_blend(raw[((size_t)n * M + m) * C + 4], act);
+    const float mine = nova_blend(raw[e], act);
+    g = gloss[0] * scale * sign(b - 1.0f) * nova_blend_slope(mine, act);
   }
   grad[e] = accumulate ? grad[e] + g : g;
 }
@@ -125,9 +123,8 @@ __kernel void alpha_outside_partial(__global const float* raw, __global const fl
     const uint e = rs + q;  // skips NeRF 0
     const uint n = e / rs, at = e % rs;
     const float outside = 1.0f - mask[n * R + at / S];
-    const float sigma = fmax(raw[(size_t)e * C + 3] + (use_noise ? noise[e] : 0.0f), 0.0f);
-    const float alpha = -expm1(-sigma * delta[n * delta_stride + at]);
-    const float blend = c_out != 0.0f ? loss_blend(raw[(size_t)e * C + 4], act) : 0.0f;
+    const float alpha = nova_alpha(raw[(size_t)e * C + 3] + (use_noise ? noise[e] : 0.0f), delta[n * delta_stride + at]);
+    const float blend = c_out != 0.0f ? nova_blend(raw[(size_t)e * C + 4], act) : 0.0f;
     s += c_out * outside * (alpha + blend) + c_in * (1.0f - outside) * alpha;
   }
   partial[p] = s;
@@ -151,11 +148,11 @@ __kernel void alpha_outside_backward(__global const float* raw, __global const f
       const float wa = gloss[0] * scale * (c_out * outside + c_in * (1.0f - outside));
       const float s = raw[e] + (use_noise ? noise[sample] : 0.0f);
       const float d = delta[n * delta_stride + at];
-      const float t = exp(-fmax(s, 0.0f) * d);
+      const float t = nova_transmittance(s, d);
       // d alpha / d sigma = delta exp(-sigma delta), 0 once exp underflows, 0 below the ReLU.
       g = s > 0.0f && t > 0.0f ? wa * t * d : 0.0f;
     } else if (w != 0.0f) {
-      g = w * loss_blend_slope(loss_blend(raw[e], act), act);
+      g = w * nova_blend_slope(nova_blend(raw[e], act), act);
     }
   }
   grad[e] = accumulate ? grad[e] + g : g;

@@ -8,8 +8,6 @@
 // group_ratio_factor gives each group's d loss / d num_g = 1 / ((den_g + eps) c) (0 when
 // den_g + eps is 0: an empty group adds nothing) for the backward kernels.
 
-inline float ref_blend(float raw, int act) { return act ? 1.0f / (1.0f + exp(-raw)) : raw; }
-inline float ref_blend_slope(float b, int act) { return act ? b * (1.0f - b) : 1.0f; }
 
 inline float group_sum(__global const float* partial, uint at, uint parts) {
   float s = 0.0f;
@@ -95,9 +93,8 @@ __kernel void alpha_outside_group_partial(__global const float* raw, __global co
     den += 1.0f;
     for (uint i = 0; i < S; ++i) {
       const size_t at = (size_t)r * S + i, e = n * rs + at;
-      const float sigma = fmax(raw[e * C + 3] + (use_noise ? noise[e] : 0.0f), 0.0f);
-      const float alpha = -expm1(-sigma * delta[n * (size_t)delta_stride + at]);
-      num += alpha + ref_blend(raw[e * C + 4], act);
+      const float alpha = nova_alpha(raw[e * C + 3] + (use_noise ? noise[e] : 0.0f), delta[n * (size_t)delta_stride + at]);
+      num += alpha + nova_blend(raw[e * C + 4], act);
     }
   }
   partial[2 * g * parts + p] = num;
@@ -121,11 +118,11 @@ __kernel void alpha_outside_group_backward(__global const float* raw, __global c
     if (ch == 3) {
       const float s = raw[e] + (use_noise ? noise[sample] : 0.0f);
       const float d = delta[n * delta_stride + at];
-      const float t = exp(-fmax(s, 0.0f) * d);
+      const float t = nova_transmittance(s, d);
       // d alpha / d sigma = delta exp(-sigma delta), 0 once exp underflows, 0 below the ReLU.
       g = s > 0.0f && t > 0.0f ? w * t * d : 0.0f;
     } else {
-      g = w * ref_blend_slope(ref_blend(raw[e], act), act);
+      g = w * nova_blend_slope(nova_blend(raw[e], act), act);
     }
   }
   grad[e] = accumulate ? grad[e] + g : g;

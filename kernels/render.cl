@@ -69,7 +69,6 @@ inline float blend_norm(float bsum) {
 #endif
 }
 
-inline float sigmoid_of(float x) { return 1.0f / (1.0f + exp(-x)); }
 
 // Everything one sample of one NeRF contributes, with the derivatives of the activations.
 typedef struct {
@@ -85,18 +84,16 @@ typedef struct {
 inline SampleTerms sample_terms(__global const float* p, float delta, float noise) {
   SampleTerms t;
   const float s = p[3] + noise;
-  const float sigma = fmax(s, 0.0f);
-  const float x = sigma * delta;
-  t.alpha = -expm1(-x);
-  t.trans = exp(-x);
-  // d alpha / d sigma = delta exp(-x); written as a product that is 0 (not 0 * inf) once
-  // exp(-x) underflows, whatever delta is.
+  t.alpha = nova_alpha(s, delta);
+  t.trans = nova_transmittance(s, delta);
+  // d alpha / d sigma = delta exp(-sigma delta); written as a product that is 0 (not 0 * inf)
+  // once the exponential underflows, whatever delta is.
   t.dadraw = s > 0.0f ? (t.trans > 0.0f ? t.trans * delta : 0.0f) : 0.0f;
 #if NO_BLEND
   t.blend = 1.0f;
   t.dbdraw = 0.0f;
 #elif BLEND_SIGMOID
-  t.blend = sigmoid_of(p[4]);
+  t.blend = NOVA_SIGMOID(p[4]);
   t.dbdraw = t.blend * (1.0f - t.blend);
 #else
   t.blend = p[4];
@@ -104,7 +101,7 @@ inline SampleTerms sample_terms(__global const float* p, float delta, float nois
 #endif
   for (int k = 0; k < 3; ++k) {
 #if RGB_SIGMOID
-    t.c[k] = sigmoid_of(p[k]);
+    t.c[k] = NOVA_SIGMOID(p[k]);
     t.dcdraw[k] = t.c[k] * (1.0f - t.c[k]);
 #else
     t.c[k] = p[k];

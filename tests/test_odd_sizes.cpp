@@ -780,6 +780,7 @@ BOOST_AUTO_TEST_CASE(every_kernel_ran_at_an_odd_size,
   size_t kernels = 0;
   for (const KernelSource& src : kernel_sources()) {
     const std::string family(src.family);
+    if (src.family == kKernelPrelude) continue;  // helpers only, compiled into every family
     if (kCoveredElsewhere.count(family)) {
       BOOST_TEST_MESSAGE(family << ": covered by " << kCoveredElsewhere.at(family));
       continue;

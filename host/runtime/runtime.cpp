@@ -50,11 +50,16 @@ cl_program Runtime::build_program(const std::string& family, const std::string& 
   const auto& sources = kernel_sources();
   const auto it = std::find_if(sources.begin(), sources.end(),
                                [&](const KernelSource& s) { return s.family == family; });
-  if (it == sources.end()) throw Error("no embedded kernel family '" + family + "'", kExitInternal);
-  const char* text = it->source.data();
-  const size_t length = it->source.size();
+  const auto prelude = std::find_if(sources.begin(), sources.end(),
+                                    [](const KernelSource& s) { return s.family == kKernelPrelude; });
+  if (it == sources.end() || it == prelude || prelude == sources.end())
+    throw Error("no embedded kernel family '" + family + "'", kExitInternal);
+  // The prelude, then the family from its own line 1 (so build logs name the family's lines).
+  static constexpr std::string_view kLine = "\n#line 1\n";
+  const char* texts[3] = {prelude->source.data(), kLine.data(), it->source.data()};
+  const size_t lengths[3] = {prelude->source.size(), kLine.size(), it->source.size()};
   cl_int st = CL_SUCCESS;
-  cl_program program = clCreateProgramWithSource(context_, 1, &text, &length, &st);
+  cl_program program = clCreateProgramWithSource(context_, 3, texts, lengths, &st);
   cl_check(st, "clCreateProgramWithSource");
   const std::string opts = "-cl-std=CL1.2 " + options;
   st = clBuildProgram(program, 1, &info_.device, opts.c_str(), nullptr, nullptr);

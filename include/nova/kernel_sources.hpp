@@ -12,4 +12,7 @@ struct KernelSource {
 
 const std::vector<KernelSource>& kernel_sources();
 
+// The family compiled ahead of every other (kernels/common.cl): shared helpers, no kernels.
+inline constexpr std::string_view kKernelPrelude = "common";
+
 }  // namespace nova
