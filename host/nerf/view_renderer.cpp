@@ -167,7 +167,7 @@ struct ViewRenderer::Cached {
   Termination termination;
 };
 
-ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeometry& geometry,
+ViewRenderer::ViewRenderer(Runtime& rt, const ModelConfig& config, const RayGeometry& geometry,
                            const Checkpoint& checkpoint, int chunk_rays)
     : rt_(rt), config_(config), geometry_(geometry), checkpoint_(checkpoint) {
   if (checkpoint.get("objects") != std::to_string(geometry.num_objects))
