@@ -18,19 +18,8 @@
 #include "nova/executor.hpp"
 #include "nova/model_config.hpp"
 #include "nova/nova_graphs.hpp"
-#include "nova/train_config.hpp"
 
 namespace nova {
-
-// What a run folder holds for inference.
-struct RunFiles {
-  std::string dir;
-  TrainConfig config;
-  std::string scene;  // the scene folder it trained on
-  Checkpoint checkpoint;
-};
-// Reads RUN/config.ini and RUN/checkpoint.bin; Error (exit 2) naming what is missing or bad.
-RunFiles read_run(const std::string& dir);
 
 struct PlacedInstance {
   int object = 1;     // 1..K
