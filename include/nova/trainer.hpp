@@ -12,13 +12,13 @@
 
 #include "nova/checkpoint.hpp"
 #include "nova/executor.hpp"
-#include "nova/nova_graphs.hpp"
 #include "nova/distributed.hpp"
 #include "nova/occupancy_estimator.hpp"
 #include "nova/optim.hpp"
 #include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene.hpp"
+#include "nova/step_graphs.hpp"
 #include "nova/train_config.hpp"
 
 namespace nova {
