@@ -9,7 +9,6 @@
 
 #include "nova/losses.hpp"
 #include "nova/model_config.hpp"
-#include "nova/scene.hpp"
 
 namespace nova {
 
@@ -101,9 +100,5 @@ enum class ConfigFile { Partial, RunFile };
 TrainConfig parse_config_text(const std::string& text, const std::string& origin,
                               std::vector<std::pair<std::string, std::string>>* others = nullptr,
                               ConfigFile kind = ConfigFile::Partial);
-
-// Moves frames 0, n, 2n, ... of `scene` out of training into its ground-truth views (kind
-// "heldout", named frame_III), the LLFF evaluation protocol.
-void hold_out_frames(Scene& scene, int every);
 
 }  // namespace nova
