@@ -1,7 +1,9 @@
 #pragma once
 // A run folder: the files `nova train` writes into it and that resume, render and eval read
-// back, named here once, and the checks that a checkpoint fits the configuration beside it.
+// back, named here once, and the one check that a checkpoint holds the networks a
+// configuration describes, so that resume and render refuse the same mismatches.
 #include <string>
+#include <utility>
 
 #include "nova/checkpoint.hpp"
 #include "nova/model_config.hpp"
