@@ -17,6 +17,7 @@
 #include "nova/evaluation.hpp"
 #include "nova/image_io.hpp"
 #include "nova/progress_line.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
 #include "nova/synth.hpp"
 #include "nova/trainer.hpp"
@@ -122,11 +123,12 @@ void ensure_synthetic(const SceneSpec& s, const std::string& dir) {
 
 // Whether `run_dir` holds a finished run of exactly this configuration and scene.
 bool finished_run(const std::string& run_dir, const TrainConfig& config, const Scene& scene) {
-  if (!fs::exists(run_dir + "/" + kCheckpointFile)) return false;
+  const RunFolder run(run_dir);
+  if (!fs::exists(run.checkpoint_path())) return false;
   const std::string want = format_config(config, {"# the scene this run trained on", "scene = " + scene.source});
-  if (read_text(run_dir + "/" + kConfigFile) != want) return false;
+  if (read_text(run.config_path()) != want) return false;
   try {
-    const Checkpoint ck = read_checkpoint(run_dir + "/" + kCheckpointFile);
+    const Checkpoint ck = read_checkpoint(run.checkpoint_path());
     return std::stol(ck.get("step")) == long(config.pretrain_steps) + config.steps;
   } catch (const std::exception&) {
     return false;
@@ -180,7 +182,7 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
   // As nova eval: the run as written (config.ini, checkpoint.bin), learnt blending for the
   // scene's views, hard blending for composition targets.
   const auto t0 = clock_type::now();
-  const RunFiles files = read_run(run_dir);
+  const RunFiles files = RunFolder(run_dir).read();
   r.steps = std::stol(files.checkpoint.get("step"));
   ViewRenderer renderer(rt, files.config, ray_geometry(scene), files.checkpoint);
   std::vector<GroundTruthView> cam0, held;

@@ -18,6 +18,7 @@
 #include "nova/gemm.hpp"
 #include "nova/image_io.hpp"
 #include "nova/image_metrics.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene_io.hpp"
 #include "nova/synth.hpp"
@@ -237,7 +238,7 @@ RunResult run_setting(const Planned& pl, const Scene& scene, const DeviceInfo& d
     }
   }
   r.joint_rays_per_s = joint_s > 0 ? c.rays * double(joint_steps) / joint_s : 0;
-  if (!keep_checkpoint) fs::remove(run_dir + "/" + kCheckpointFile);
+  if (!keep_checkpoint) fs::remove(RunFolder(run_dir).checkpoint_path());
   return r;
 }
 

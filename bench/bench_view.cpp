@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "bench.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene_io.hpp"
 #include "nova/view_renderer.hpp"
@@ -77,7 +78,7 @@ int view(const Args& args) {
     return 0;
   }
   if (o.str("run").empty()) throw Error("--run RUN is required (a trained run folder)");
-  const RunFiles run = read_run(o.str("run"));
+  const RunFiles run = RunFolder(o.str("run")).read();
   const std::string scene_dir = o.str("scene").empty() ? run.scene : o.str("scene");
   if (scene_dir.empty()) throw Error("run '" + o.str("run") + "' does not name its scene: pass --scene");
   LoadOptions lo;

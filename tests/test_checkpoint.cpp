@@ -8,7 +8,7 @@
 
 #include "nova/checkpoint.hpp"
 #include "scene_test_util.hpp"
-#include "train/crc32.hpp"
+#include "nerf/crc32.hpp"
 
 using namespace nova;
 using namespace nova::test;

@@ -14,6 +14,7 @@
 #include "nova/nova_graphs.hpp"
 #include "nova/ops.hpp"
 #include "nova/render.hpp"
+#include "nova/step_graphs.hpp"
 #include "nova/train_config.hpp"
 #include "render_check.hpp"
 

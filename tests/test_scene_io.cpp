@@ -8,6 +8,7 @@
 #include "nova/image_io.hpp"
 #include "nova/llff_poses.hpp"
 #include "nova/npy.hpp"
+#include "nova/nova_graphs.hpp"
 #include "nova/scene_io.hpp"
 #include "scene_test_util.hpp"
 
@@ -176,6 +177,32 @@ BOOST_AUTO_TEST_CASE(nvidia_balloon1_if_available,
 }
 
 // ---- bad input: one test per case ----------------------------------------------------
+
+// The LLFF evaluation split. The time axis is counted from the spacing of frame times
+// (time_cells), so a scene with frames held out trains with the axis of the whole video.
+BOOST_AUTO_TEST_CASE(held_out_frames_keep_the_time_axis) {
+  Scene held;
+  held.name = "video";
+  held.has_time = true;
+  held.near = 1.0;
+  held.far = 5.0;
+  for (int i = 0; i < 12; ++i) {
+    Frame f;
+    f.time = frame_time(i, 12);
+    held.frames.push_back(f);
+  }
+  // Every 4th frame held out (frames 0, 4, 8, ...): neighbours remain, the axis is the same.
+  hold_out_frames(held, 4);
+  BOOST_REQUIRE(held.frames.size() == 9u);
+  BOOST_TEST(ray_geometry(held).frames == 12);
+  BOOST_REQUIRE(held.gt_views.size() == 3u);
+  BOOST_TEST(held.gt_views[1].name == "frame_004");
+  BOOST_TEST(held.gt_views[1].kind == "heldout");
+  BOOST_TEST(held.gt_views[1].time_index == 4);
+  BOOST_TEST(held.gt_views[1].time == frame_time(4, 12));
+  held.frames.resize(1);
+  BOOST_CHECK_THROW(hold_out_frames(held, 2), Error);
+}
 
 BOOST_AUTO_TEST_CASE(bad_missing_frame) {
   TempDir tmp("bad");

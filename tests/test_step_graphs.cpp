@@ -5,6 +5,7 @@
 #include <string>
 
 #include "nova/nova_graphs.hpp"
+#include "nova/step_graphs.hpp"
 #include "nova/train_config.hpp"
 
 using namespace nova;

@@ -8,6 +8,7 @@
 
 #include "harness.hpp"
 #include "nova/image_metrics.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/scene_io.hpp"
 #include "nova/trainer.hpp"
 #include "nova/view_renderer.hpp"

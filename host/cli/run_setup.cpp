@@ -9,7 +9,7 @@ namespace fs = std::filesystem;
 
 OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool load_gt,
                  const std::string& split) {
-  OpenRun r{read_run(run_dir), {}, {}};
+  OpenRun r{RunFolder(run_dir).read(), {}, {}};
   const std::string dir = scene_dir.empty() ? r.files.scene : scene_dir;
   if (dir.empty()) throw Error("run '" + run_dir + "' does not name its scene: pass --scene");
   r.scene = load_training_scene(dir, r.files.config, load_gt, split);

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "nova/evaluation.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/scene.hpp"
 #include "nova/train_config.hpp"
 #include "nova/view_renderer.hpp"

@@ -13,6 +13,7 @@
 #include "cli/run_setup.hpp"
 #include "nova/gemm.hpp"
 #include "nova/progress_line.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene_io.hpp"
 #include "nova/trainer.hpp"
@@ -46,16 +47,17 @@ int train_rank(const Args& args, MpiJob* mpi) {
   if (!parse(args, desc, vm, "usage: nova train --scene DIR --out RUN [--config FILE] [--resume] [--OPTION VALUE ...]"))
     return 0;
   const std::string out = vm["out"].as<std::string>();
+  const RunFolder run(out);
   const bool resume = vm["resume"].as<bool>();
 
   namespace fs = std::filesystem;
-  if (resume && !fs::exists(out + "/" + kCheckpointFile))
+  if (resume && !fs::exists(run.checkpoint_path()))
     throw Error("--resume: run folder '" + out + "' has no " + kCheckpointFile);
 
   // Preset, then the config file (on --resume: the run's own), then the command line.
   std::string config_path = vm.count("config") ? vm["config"].as<std::string>() : "";
   const bool own_config = resume && config_path.empty();
-  if (own_config) config_path = out + "/" + kConfigFile;
+  if (own_config) config_path = run.config_path();
   TrainConfig config = preset_config(vm.count("preset") ? vm["preset"].as<std::string>() : "quick");
   if (!config_path.empty()) {
     std::ifstream in(config_path);
@@ -111,7 +113,7 @@ int train_rank(const Args& args, MpiJob* mpi) {
     if (profile && lead) std::cerr << trainer.profile_table();
   } catch (...) {
     // A run that failed before its first checkpoint leaves nothing behind.
-    if (lead && created && !fs::exists(out + "/" + kCheckpointFile)) fs::remove_all(out);
+    if (lead && created && !fs::exists(run.checkpoint_path())) fs::remove_all(out);
     throw;
   }
   if (!lead) return 0;

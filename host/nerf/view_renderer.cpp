@@ -1,15 +1,11 @@
 #include "nova/view_renderer.hpp"
 
 #include <algorithm>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "nova/error.hpp"
 #include "nova/nova_fields.hpp"
 #include "nova/rays.hpp"
 #include "nova/render.hpp"
-#include "nova/trainer.hpp"
 
 namespace nova {
 namespace {
@@ -25,29 +21,6 @@ std::array<double, 12> invert_rigid(const std::array<double, 12>& m) {
 }
 
 }  // namespace
-
-RunFiles read_run(const std::string& dir) {
-  namespace fs = std::filesystem;
-  if (!fs::is_directory(dir)) throw Error("run folder '" + dir + "' does not exist");
-  const std::string cfg = dir + "/" + kConfigFile;
-  std::ifstream in(cfg);
-  if (!in) throw Error("run folder '" + dir + "' has no " + kConfigFile + " (not a nova run?)");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::vector<std::pair<std::string, std::string>> others;
-  RunFiles r;
-  r.dir = dir;
-  r.config = parse_config_text(text.str(), cfg, &others, ConfigFile::RunFile);
-  for (auto& [k, v] : others)
-    if (k == "scene") r.scene = v;
-  if (!fs::exists(dir + "/" + kCheckpointFile))
-    throw Error("run folder '" + dir + "' has no " + kCheckpointFile + " yet (training has not saved one)");
-  r.checkpoint = read_checkpoint(dir + "/" + kCheckpointFile);
-  if (r.checkpoint.get("networks") != network_fingerprint(r.config))
-    throw Error("run folder '" + dir + "': the checkpoint's networks (" + r.checkpoint.get("networks") +
-                ") differ from " + kConfigFile + " (" + network_fingerprint(r.config) + ")");
-  return r;
-}
 
 std::vector<PlacedInstance> scene_instances(int objects, double time) {
   std::vector<PlacedInstance> v;
@@ -167,7 +140,7 @@ struct ViewRenderer::Cached {
   Termination termination;
 };
 
-ViewRenderer::ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeometry& geometry,
+ViewRenderer::ViewRenderer(Runtime& rt, const ModelConfig& config, const RayGeometry& geometry,
                            const Checkpoint& checkpoint, int chunk_rays)
     : rt_(rt), config_(config), geometry_(geometry), checkpoint_(checkpoint) {
   if (checkpoint.get("objects") != std::to_string(geometry.num_objects))

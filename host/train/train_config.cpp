@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <charconv>
-#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -396,44 +395,6 @@ TrainConfig parse_config_text(const std::string& text, const std::string& origin
       if (!written && !o.before.empty()) o.set(c, o.before);
     }
   return c;
-}
-
-void hold_out_frames(Scene& scene, int every) {
-  if (every <= 0) return;
-  if (scene.frames.size() < 2)
-    throw Error("option 'holdout': scene '" + scene.name + "' has too few frames to hold any out");
-  std::vector<Frame> kept;
-  for (size_t i = 0; i < scene.frames.size(); ++i) {
-    Frame& f = scene.frames[i];
-    if (i % static_cast<size_t>(every) != 0) {
-      kept.push_back(std::move(f));
-      continue;
-    }
-    GroundTruthView v;
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%03zu", i);
-    v.name = name;
-    v.kind = "heldout";
-    v.time_index = static_cast<int>(i);
-    v.time = f.time;
-    v.camera = f.camera;
-    v.rgb = std::move(f.rgb);
-    scene.gt_views.push_back(std::move(v));
-  }
-  scene.frames = std::move(kept);
-  scene.notes.push_back("held out every " + std::to_string(every) + "th frame (" +
-                        std::to_string(scene.gt_views.size()) + " views) for evaluation");
-}
-
-std::string network_fingerprint(const TrainConfig& c) {
-  std::ostringstream s;
-  s << "depth=" << c.field.depth << " width=" << c.field.width << " skip=" << c.field.skip
-    << " pos-freqs=" << c.field.pos_freqs << " dir-freqs=" << c.field.dir_freqs
-    << " view-dirs=" << c.field.view_dirs;
-  if (c.field.encoding == Encoding::HashGrid)  // frequency runs keep their earlier fingerprint
-    s << " encoding=hashgrid hash-levels=" << c.field.hash.levels << " hash-features=" << c.field.hash.features
-      << " hash-log2-size=" << c.field.hash.log2_size;
-  return s.str();
 }
 
 }  // namespace nova

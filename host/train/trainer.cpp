@@ -53,7 +53,7 @@ void write_text_atomic(const std::string& path, const std::string& text) {
 
 Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std::string run_dir,
                  GradientReducer* reducer)
-    : rt_(rt), scene_(scene), config_(config), run_dir_(std::move(run_dir)),
+    : rt_(rt), scene_(scene), config_(config), run_(std::move(run_dir)),
       geometry_(ray_geometry(scene)), rng_(config.seed), reducer_(reducer) {
   validate(config_);
   if (ranks() > 1 && static_cast<size_t>(config_.rays) % ranks() != 0)
@@ -61,8 +61,8 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
                 " ranks");
   if (scene.frames.empty()) throw Error("scene '" + scene.source + "' has no frames");
   std::error_code ec;
-  fs::create_directories(run_dir_, ec);
-  if (ec) throw Error("cannot create run folder '" + run_dir_ + "': " + ec.message());
+  fs::create_directories(run_.dir(), ec);
+  if (ec) throw Error("cannot create run folder '" + run_.dir() + "': " + ec.message());
   regions_.reserve(scene.frames.size());
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
   if (config_.occupancy) {
@@ -74,7 +74,7 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
     occupancy_->enable_updates(rt_, config_.field, geometry_, times, {config_.occupancy_warmup, config_.occupancy_every});
   }
   if (writes_files())
-    write_text_atomic(run_dir_ + "/" + kConfigFile,
+    write_text_atomic(run_.config_path(),
                       format_config(config_, {"# the scene this run trained on", "scene = " + scene.source}));
 }
 
@@ -290,8 +290,8 @@ void Trainer::run(const std::function<void(const TrainProgress&)>& progress, lon
   double pretrain_step_s = 0, joint_step_s = 0;  // recent seconds per step, for the ETA
   std::ofstream metrics;
   if (writes_files()) {
-    metrics.open(run_dir_ + "/" + kMetricsFile, std::ios::app);
-    if (!metrics) throw Error("cannot write '" + run_dir_ + "/" + kMetricsFile + "'");
+    metrics.open(run_.metrics_path(), std::ios::app);
+    if (!metrics) throw Error("cannot write '" + run_.metrics_path() + "'");
   }
   while (step_ < end) {
     const bool log = (step_ + 1) % config_.log_every == 0 || step_ + 1 == end;
@@ -357,17 +357,16 @@ Checkpoint Trainer::checkpoint() {
   return ck;
 }
 
-void Trainer::write_checkpoint_now() { write_checkpoint(run_dir_ + "/" + kCheckpointFile, checkpoint()); }
+void Trainer::write_checkpoint_now() { write_checkpoint(run_.checkpoint_path(), checkpoint()); }
 
 void Trainer::resume() {
-  const std::string path = run_dir_ + "/" + kCheckpointFile;
+  const std::string path = run_.checkpoint_path();
   Checkpoint ck = read_checkpoint(path);
   const auto mismatch = [&](const std::string& what) {
     return Error("checkpoint '" + path + "' does not fit this run: " + what);
   };
   if (ck.get("format") != kFormat) throw mismatch("format '" + ck.get("format") + "'");
-  if (ck.get("networks") != network_fingerprint(config_))
-    throw mismatch("written for networks '" + ck.get("networks") + "', configured '" + network_fingerprint(config_) + "'");
+  run_.check_networks(ck, config_, "this run");
   if (ck.get("objects") != std::to_string(scene_.num_objects))
     throw mismatch(ck.get("objects") + " objects in the checkpoint, " + std::to_string(scene_.num_objects) + " in the scene");
   step_ = std::stol(ck.get("step"));
@@ -399,7 +398,7 @@ void Trainer::resume() {
       throw mismatch(e.what());
     }
   }
-  if (writes_files()) truncate_metrics(run_dir_ + "/" + kMetricsFile, step_);
+  if (writes_files()) truncate_metrics(run_.metrics_path(), step_);
 }
 
 }  // namespace nova

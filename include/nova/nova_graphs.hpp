@@ -1,21 +1,18 @@
 #pragma once
-// The graphs of a NOVA model: the static pretraining step, the joint training step and the
-// inference render of a view with placed object instances. The trainer and the renderer
-// both build from here, so training and inference see the same fields and the same rays.
+// The graphs of a NOVA model besides its training steps: the render of a view with placed
+// object instances and the density probes of the occupancy grids, with the field and
+// sampling helpers the training step graphs (step_graphs.hpp) build from too, so that
+// training and inference see the same fields and the same rays.
 #include <array>
 #include <memory>
-#include <string>
-#include <utility>
 #include <vector>
 
-#include "nova/distributed.hpp"
 #include "nova/graph.hpp"
-#include "nova/losses.hpp"
+#include "nova/nova_fields.hpp"
 #include "nova/occupancy.hpp"
-#include "nova/random.hpp"
+#include "nova/rays.hpp"
 #include "nova/render.hpp"
 #include "nova/scene.hpp"
-#include "nova/train_config.hpp"
 
 namespace nova {
 
@@ -42,41 +39,16 @@ RayGeometry ray_geometry(const Scene& scene);
 // with hash_time_auto, its cells along time (frames / kFramesPerTimeCell, at least 1).
 FieldConfig scene_field(const FieldConfig& f, const RayGeometry& g);
 
-struct StepGraph {
-  Graph graph;
-  int nerfs = 1;  // 1 (pretraining) or 1 + K
-  // Data inputs, set every step (invalid when the graph has none); times is [K, 1], each
-  // object's time.
-  Tensor pixels, cameras, times, target_rgb, target_masks;
-  // Drawn on the device every run (random.hpp): stratified jitter [R, S] and, with
-  // noise_std > 0, density noise [N, R * S]. `draws` is their counter: set it to the step.
-  Tensor jitter, noise;
-  std::shared_ptr<DrawCounter> draws;
-  // The targets of the depth and free-space terms (when either is built): minus the disparity
-  // per ray, and 1 where it applies (0 on augmented steps, whose warped views have no disparity).
-  Tensor target_depth, depth_valid;
-  // [N, R, 3] each NeRF's own target colour: only under LossConventions::nerf_rgb_area.
-  Tensor target_nerf_rgb;
-  Tensor loss;
-  std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
-  Tensor psnr_mse;  // the composite-colour mse the progress PSNR is computed from
-  // With TrainConfig::occupancy: what the static and the object samples are packed against
-  // (null: no packing). Their grids are unset, so nothing is skipped until the owner sets them.
-  std::shared_ptr<PackSelect> pack_static, pack_objects;
-};
-
-// Whether the scene's disparity can supervise depth: every frame has a map, and rays are NDC
-// (where the rendered depth is affine in disparity; metric depth is not).
-bool disparity_usable(const RayGeometry& g);
-// Whether the graphs get the depth loss: a weight and usable disparity.
-bool depth_term_active(const TrainConfig& c, const RayGeometry& g);
-
-// The static NeRF alone on `rays` rays (background pixels): mse of its colour.
-// With a slice (data-parallel training, distributed.hpp) the graph takes c.rays rays, the
-// slice's share, and draws the randomness of those rays of the whole step.
-std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& g, RaySlice slice = {});
-// All 1 + K NeRFs with the novel-view losses of c.weights (K >= 1).
-std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeometry& g, RaySlice slice = {});
+// Stratified sampling of `samples` per ray over g's depth range, NeRFs grouped as `groups`.
+SampleOptions sample_options(int samples, const RayGeometry& g, std::vector<int> groups);
+// What a pack op tests against (grid_of_batch[b]: batch b's grid); null, no packing, when !on.
+std::shared_ptr<PackSelect> new_select(bool on, std::vector<int> grid_of_batch);
+// The grids of object NeRFs 1..objects (grid 0 is the static NeRF's).
+std::vector<int> object_grids(int objects);
+// The static field on the samples `pack` keeps (every one without), the rest empty_raw_fill.
+Tensor static_raw(Tensor positions, Tensor viewdirs, const FieldConfig& f, std::shared_ptr<PackSelect> pack);
+// The object fields at `times`, on the samples `pack` keeps as static_raw.
+Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, std::shared_ptr<PackSelect> pack);
 
 struct ViewGraph {
   Graph graph;

@@ -45,4 +45,8 @@ Scene load_dnerf_npz_scene(const std::string& dir_or_file, const LoadOptions& op
 // A few lines describing the scene: sizes, cameras, masks, bounds, ground truth, notes.
 std::string scene_summary(const Scene& scene);
 
+// Moves frames 0, n, 2n, ... of `scene` out of training into its ground-truth views (kind
+// "heldout", named frame_III), the LLFF evaluation protocol; Error when fewer than 2 frames.
+void hold_out_frames(Scene& scene, int every);
+
 }  // namespace nova

@@ -8,17 +8,16 @@
 #include <vector>
 
 #include "nova/losses.hpp"
-#include "nova/nova_fields.hpp"
-#include "nova/scene.hpp"
+#include "nova/model_config.hpp"
 
 namespace nova {
 
-struct TrainConfig {
+// The model (field, samples, occupancy, occupancy_alpha) is the ModelConfig a renderer reads
+// back from the run's config.ini; the rest is how it is trained.
+struct TrainConfig : ModelConfig {
   std::string preset = "quick";
-  FieldConfig field;
-  // Rays and samples.
+  // Rays.
   int rays = 1024;          // rays per step (split over background and objects)
-  int samples = 64;         // stratified samples per ray
   float noise_std = 1.0f;   // density noise while training
   // Schedule.
   int pretrain_steps = 100000;  // static NeRF alone, background pixels
@@ -53,14 +52,12 @@ struct TrainConfig {
   // Weight more than the margin *behind* that depth costs free_space_behind times as much: an
   // object pushed back along the one camera's rays renders the same training image.
   float free_space_behind = 0.0f;
-  // Empty-space skipping (occupancy.hpp): one grid per NeRF, updated from the density every
-  // occupancy_every steps once occupancy_warmup steps of a phase have passed; samples in
-  // empty cells never reach an MLP.
-  bool occupancy = true;
+  // Empty-space skipping (occupancy.hpp; on with ModelConfig::occupancy): one grid per NeRF,
+  // updated from the density every occupancy_every steps once occupancy_warmup steps of a
+  // phase have passed; samples in empty cells never reach an MLP.
   int occupancy_res = 64;
   int occupancy_every = 16;
   int occupancy_warmup = 256;
-  float occupancy_alpha = 0.01f;
   // Scene loading.
   int factor = 0;   // image downscale (0: the reader's default)
   int holdout = 0;  // every n-th frame is held out for evaluation (0: none; LLFF uses 8)
@@ -103,13 +100,5 @@ enum class ConfigFile { Partial, RunFile };
 TrainConfig parse_config_text(const std::string& text, const std::string& origin,
                               std::vector<std::pair<std::string, std::string>>* others = nullptr,
                               ConfigFile kind = ConfigFile::Partial);
-
-// Moves frames 0, n, 2n, ... of `scene` out of training into its ground-truth views (kind
-// "heldout", named frame_III), the LLFF evaluation protocol.
-void hold_out_frames(Scene& scene, int every);
-
-// The parameters that fix the networks' shapes: a checkpoint written under one
-// fingerprint cannot be loaded under another.
-std::string network_fingerprint(const TrainConfig& c);
 
 }  // namespace nova

@@ -12,12 +12,13 @@
 
 #include "nova/checkpoint.hpp"
 #include "nova/executor.hpp"
-#include "nova/nova_graphs.hpp"
 #include "nova/distributed.hpp"
 #include "nova/occupancy_estimator.hpp"
 #include "nova/optim.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
 #include "nova/scene.hpp"
+#include "nova/step_graphs.hpp"
 #include "nova/train_config.hpp"
 
 namespace nova {
@@ -34,10 +35,6 @@ struct TrainProgress {
   double kept = -1;
   std::vector<double> occupied;
 };
-
-inline const std::string kCheckpointFile = "checkpoint.bin";
-inline const std::string kConfigFile = "config.ini";
-inline const std::string kMetricsFile = "metrics.jsonl";
 
 class Trainer {
  public:
@@ -70,7 +67,7 @@ class Trainer {
   // their gradients and Adam's two moments (0 before the first step).
   size_t device_bytes() const;
   long total_steps() const;
-  const std::string& run_dir() const { return run_dir_; }
+  const std::string& run_dir() const { return run_.dir(); }
   // The current state as a checkpoint (what run() writes).
   Checkpoint checkpoint();
 
@@ -84,7 +81,7 @@ class Trainer {
   Runtime& rt_;
   const Scene& scene_;
   TrainConfig config_;
-  std::string run_dir_;
+  RunFolder run_;
   RayGeometry geometry_;
   std::mt19937 rng_;
   long step_ = 0;

@@ -16,20 +16,10 @@
 #include "nova/compose_spec.hpp"
 #include "nova/object_centre.hpp"
 #include "nova/executor.hpp"
+#include "nova/model_config.hpp"
 #include "nova/nova_graphs.hpp"
-#include "nova/train_config.hpp"
 
 namespace nova {
-
-// What a run folder holds for inference.
-struct RunFiles {
-  std::string dir;
-  TrainConfig config;
-  std::string scene;  // the scene folder it trained on
-  Checkpoint checkpoint;
-};
-// Reads RUN/config.ini and RUN/checkpoint.bin; Error (exit 2) naming what is missing or bad.
-RunFiles read_run(const std::string& dir);
 
 struct PlacedInstance {
   int object = 1;     // 1..K
@@ -107,7 +97,7 @@ struct RenderStats {
 class ViewRenderer {
  public:
   // `chunk_rays` 0: chosen from the network width (about 2^24 activations per layer).
-  ViewRenderer(Runtime& rt, const TrainConfig& config, const RayGeometry& geometry,
+  ViewRenderer(Runtime& rt, const ModelConfig& config, const RayGeometry& geometry,
                const Checkpoint& checkpoint, int chunk_rays = 0);
   ~ViewRenderer();
   ViewImage render(const ViewRequest& request);
@@ -148,7 +138,7 @@ class ViewRenderer {
   std::vector<size_t> segments() const;
 
   Runtime& rt_;
-  TrainConfig config_;
+  ModelConfig config_;
   RayGeometry geometry_;
   const Checkpoint& checkpoint_;
   bool has_objects_ = false;

@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "nova/error.hpp"
-#include "train/crc32.hpp"
+#include "nerf/crc32.hpp"
 
 namespace nova {
 namespace {

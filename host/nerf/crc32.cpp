@@ -1,5 +1,5 @@
 // Table-driven, one byte at a time: checkpoints are tens of MB, so this is not a hot path.
-#include "train/crc32.hpp"
+#include "nerf/crc32.hpp"
 
 #include <array>
 

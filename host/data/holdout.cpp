@@ -1,0 +1,39 @@
+// The hold-out split: plain data work on a Scene, beside the readers that fill one.
+#include "nova/scene_io.hpp"
+
+#include <cstdio>
+#include <utility>
+#include <vector>
+
+#include "nova/error.hpp"
+
+namespace nova {
+
+void hold_out_frames(Scene& scene, int every) {
+  if (every <= 0) return;
+  if (scene.frames.size() < 2)
+    throw Error("option 'holdout': scene '" + scene.name + "' has too few frames to hold any out");
+  std::vector<Frame> kept;
+  for (size_t i = 0; i < scene.frames.size(); ++i) {
+    Frame& f = scene.frames[i];
+    if (i % static_cast<size_t>(every) != 0) {
+      kept.push_back(std::move(f));
+      continue;
+    }
+    GroundTruthView v;
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%03zu", i);
+    v.name = name;
+    v.kind = "heldout";
+    v.time_index = static_cast<int>(i);
+    v.time = f.time;
+    v.camera = f.camera;
+    v.rgb = std::move(f.rgb);
+    scene.gt_views.push_back(std::move(v));
+  }
+  scene.frames = std::move(kept);
+  scene.notes.push_back("held out every " + std::to_string(every) + "th frame (" +
+                        std::to_string(scene.gt_views.size()) + " views) for evaluation");
+}
+
+}  // namespace nova

@@ -1,0 +1,42 @@
+#include "nova/run_folder.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include "nova/error.hpp"
+
+namespace nova {
+
+RunFiles RunFolder::read() const {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir_)) throw Error("run folder '" + dir_ + "' does not exist");
+  const std::string cfg = config_path();
+  std::ifstream in(cfg);
+  if (!in) throw Error("run folder '" + dir_ + "' has no " + kConfigFile + " (not a nova run?)");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::vector<std::pair<std::string, std::string>> others;
+  RunFiles r;
+  r.dir = dir_;
+  r.config = parse_config_text(text.str(), cfg, &others, ConfigFile::RunFile);
+  for (auto& [k, v] : others)
+    if (k == "scene") r.scene = v;
+  if (!fs::exists(checkpoint_path()))
+    throw Error("run folder '" + dir_ + "' has no " + kCheckpointFile + " yet (training has not saved one)");
+  r.checkpoint = read_checkpoint(checkpoint_path());
+  check_networks(r.checkpoint, r.config, "'" + cfg + "'");
+  return r;
+}
+
+void RunFolder::check_networks(const Checkpoint& ck, const ModelConfig& config,
+                               const std::string& configured_by) const {
+  const std::string written = ck.get("networks"), configured = network_fingerprint(config);
+  if (written != configured)
+    throw Error("checkpoint '" + checkpoint_path() + "' does not fit " + configured_by + ": written for networks '" +
+                written + "', configured '" + configured + "'");
+}
+
+}  // namespace nova
