@@ -2,71 +2,25 @@
 // `--key value` and `--flag` parsing for nova-bench (which links no Boost, so that a GPU
 // machine without packages can build it from the core alone).
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
-
-#include "nova/error.hpp"
 
 namespace nova::bench {
 
 class Options {
  public:
-  Options(const std::vector<std::string>& args, const std::map<std::string, std::string>& defaults)
-      : values_(defaults) {
-    for (size_t i = 0; i < args.size(); ++i) {
-      if (args[i] == "--help" || args[i] == "-h") {
-        help_ = true;
-        continue;
-      }
-      if (args[i].rfind("--", 0) != 0) throw Error("unexpected argument '" + args[i] + "'");
-      const std::string key = args[i].substr(2);
-      if (!values_.count(key)) throw Error("unknown option --" + key);
-      const bool is_flag = values_[key] == "off" || values_[key] == "on";
-      if (is_flag) {
-        values_[key] = "on";
-      } else {
-        if (i + 1 >= args.size()) throw Error("--" + key + " needs a value");
-        values_[key] = args[++i];
-      }
-    }
-  }
+  // `defaults` names every option; a default of "off" or "on" makes it a flag. Error naming
+  // the argument on an unknown option, a stray argument or a missing value.
+  Options(const std::vector<std::string>& args, const std::map<std::string, std::string>& defaults);
   // --help was given: print usage() and stop.
   bool help() const { return help_; }
-  std::string usage(const std::string& command) const {
-    std::string u = "usage: " + command + " [options]\n\noptions (default):\n";
-    for (const auto& [k, v] : values_) u += "  --" + k + " (" + (v.empty() ? "none" : v) + ")\n";
-    return u;
-  }
+  std::string usage(const std::string& command) const;
   std::string str(const std::string& k) const { return values_.at(k); }
   bool flag(const std::string& k) const { return values_.at(k) == "on"; }
-  long integer(const std::string& k) const {
-    try {
-      return std::stol(values_.at(k));
-    } catch (const std::exception&) {
-      throw Error("--" + k + " must be an integer, got '" + values_.at(k) + "'");
-    }
-  }
+  long integer(const std::string& k) const;
   // A comma-separated list, empty items dropped.
-  std::vector<std::string> strings(const std::string& k) const {
-    std::vector<std::string> out;
-    std::stringstream s(values_.at(k));
-    for (std::string item; std::getline(s, item, ',');)
-      if (!item.empty()) out.push_back(item);
-    return out;
-  }
-  std::vector<long> integers(const std::string& k) const {
-    std::vector<long> out;
-    std::stringstream s(values_.at(k));
-    for (std::string item; std::getline(s, item, ',');) {
-      try {
-        out.push_back(std::stol(item));
-      } catch (const std::exception&) {
-        throw Error("--" + k + " must be a comma-separated list of integers");
-      }
-    }
-    return out;
-  }
+  std::vector<std::string> strings(const std::string& k) const;
+  std::vector<long> integers(const std::string& k) const;
 
  private:
   std::map<std::string, std::string> values_;

@@ -687,9 +687,9 @@ BOOST_AUTO_TEST_CASE(depth_loss_kernels) {
   }
   expect_close(ex.get_grad(tp), fd, 1e-4 * max_abs(fd), 1e-3, "d depth_loss / d depth");
 
-  // free_space_partial / free_space_backward: 2 NeRFs x 1009 rays x 3 samples against the
-  // float64 reference and its central differences (tests/test_free_space_loss_op.cpp states
-  // the tolerances).
+  // free_space.cl: free_space_fit / _partial / _backward, 2 NeRFs x 1009 rays x 3 samples,
+  // against the float64 reference and its central differences
+  // (tests/test_free_space_loss_op.cpp states the tolerances).
   FreeSpaceCase f;
   f.N = 2, f.R = kRows, f.S = 3;
   f.raw = random_floats(f.N * kRows * f.S * f.C, -1, 1, 183);

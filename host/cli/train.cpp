@@ -4,9 +4,7 @@
 #include <cstdio>
 #include <functional>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 
 #include "cli/mpi_job.hpp"
 #include "cli/options.hpp"
@@ -17,6 +15,7 @@
 #include "nova/runtime.hpp"
 #include "nova/scene_io.hpp"
 #include "nova/trainer.hpp"
+#include "runtime/read_file.hpp"
 
 namespace nova::cli {
 namespace {
@@ -60,12 +59,10 @@ int train_rank(const Args& args, MpiJob* mpi) {
   if (own_config) config_path = run.config_path();
   TrainConfig config = preset_config(vm.count("preset") ? vm["preset"].as<std::string>() : "quick");
   if (!config_path.empty()) {
-    std::ifstream in(config_path);
-    if (!in) throw Error("config file '" + config_path + "' cannot be read");
-    std::stringstream text;
-    text << in.rdbuf();
+    const std::optional<std::string> text = read_file(config_path);
+    if (!text) throw Error("config file '" + config_path + "' cannot be read");
     std::vector<std::pair<std::string, std::string>> others;  // e.g. the scene of a config.ini
-    config = parse_config_text(text.str(), config_path, &others,
+    config = parse_config_text(*text, config_path, &others,
                                own_config ? ConfigFile::RunFile : ConfigFile::Partial);
     for (auto& [k, v] : others)
       if (k != "scene") throw Error(config_path + ": unknown option '" + k + "'");

@@ -15,6 +15,7 @@
 #include "cli/options.hpp"
 #include "nova/gemm.hpp"
 #include "nova/runtime.hpp"
+#include "runtime/parse_number.hpp"
 
 namespace nova::cli {
 namespace {
@@ -23,16 +24,9 @@ std::vector<size_t> size_list(const std::string& text, const char* option) {
   std::vector<size_t> out;
   std::stringstream s(text);
   for (std::string item; std::getline(s, item, ',');) {
-    size_t used = 0;
-    long v = 0;
-    try {
-      v = std::stol(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != item.size() || v <= 0)
-      throw Error(std::string("--") + option + ": '" + item + "' is not a positive integer");
-    out.push_back(static_cast<size_t>(v));
+    const std::optional<long> v = parse_whole_long(item);
+    if (!v || *v <= 0) throw Error(std::string("--") + option + ": '" + item + "' is not a positive integer");
+    out.push_back(static_cast<size_t>(*v));
   }
   if (out.empty()) throw Error(std::string("--") + option + " is empty");
   return out;

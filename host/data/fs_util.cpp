@@ -2,12 +2,12 @@
 #include "data/fs_util.hpp"
 
 #include <algorithm>
-#include <fstream>
 #include <random>
-#include <sstream>
 #include <unistd.h>
+#include <utility>
 
 #include "nova/error.hpp"
+#include "runtime/read_file.hpp"
 
 namespace nova::data {
 
@@ -49,11 +49,9 @@ std::vector<std::pair<int, fs::path>> numbered_subdirs(const fs::path& dir) {
 }
 
 std::string read_text(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw Error(file.string() + ": cannot open");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  std::optional<std::string> text = read_file(file.string());
+  if (!text) throw Error(file.string() + ": cannot open");
+  return std::move(*text);
 }
 
 StagedDir::StagedDir(const fs::path& target, bool replace_existing)

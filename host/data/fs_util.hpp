@@ -15,6 +15,7 @@ std::vector<fs::path> list_files(const fs::path& dir, const std::vector<std::str
 // Sub-folders of `dir` with all-digit names, sorted by their number.
 std::vector<std::pair<int, fs::path>> numbered_subdirs(const fs::path& dir);
 
+// The file's bytes; error "FILE: cannot open" when it cannot be opened.
 std::string read_text(const fs::path& file);
 
 // Writes into a temporary sibling of `target` and renames it into place at the end, so a

@@ -7,7 +7,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "data/fs_util.hpp"
 #include "nova/error.hpp"
+#include "runtime/parse_number.hpp"
 
 namespace nova {
 namespace {
@@ -93,16 +95,10 @@ NpyArray parse_npy(const std::string& bytes, const std::string& origin) {
     const auto b = dim.find_first_not_of(' ');
     if (b == std::string::npos) continue;  // the trailing comma of a 1-tuple
     dim = dim.substr(b, dim.find_last_not_of(' ') - b + 1);
-    size_t used = 0;
-    unsigned long long v = 0;
-    try {
-      v = std::stoull(dim, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != dim.size()) fail(origin, "bad .npy header: shape entry '" + dim + "'");
-    a.shape.push_back(static_cast<size_t>(v));
-    count *= static_cast<size_t>(v);
+    const std::optional<unsigned long long> v = parse_whole_unsigned(dim);
+    if (!v) fail(origin, "bad .npy header: shape entry '" + dim + "'");
+    a.shape.push_back(static_cast<size_t>(*v));
+    count *= static_cast<size_t>(*v);
   }
   const size_t need = count * item;
   if (bytes.size() - offset < need)
@@ -123,11 +119,7 @@ NpyArray parse_npy(const std::string& bytes, const std::string& origin) {
 }
 
 NpyArray read_npy(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_npy(ss.str(), path);
+  return parse_npy(data::read_text(path), path);
 }
 
 namespace {

@@ -5,10 +5,9 @@
 
 #include <climits>
 #include <cstdint>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
+#include "data/fs_util.hpp"
 #include "nova/error.hpp"
 
 namespace nova::data {
@@ -59,11 +58,7 @@ std::string inflate(const std::string& in, size_t expected_size, const std::stri
 }
 
 std::map<std::string, std::string> read_zip(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw Error(path + ": cannot open");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  const std::string z = ss.str();
+  const std::string z = data::read_text(path);
   // End of central directory: the last "PK\5\6" within the final 64 KiB + 22 bytes.
   size_t eocd = std::string::npos;
   for (size_t i = z.size() >= 22 ? z.size() - 22 : 0; i + 22 <= z.size(); --i) {

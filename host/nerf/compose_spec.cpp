@@ -3,10 +3,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "nova/error.hpp"
+#include "runtime/parse_number.hpp"
+#include "runtime/read_file.hpp"
 
 namespace nova {
 namespace {
@@ -17,16 +19,9 @@ namespace {
 
 double parse_number(const std::string& s, const std::string& origin, int line,
                     const std::string& key) {
-  size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != s.size() || s.empty() || !std::isfinite(v))
-    fail(origin, line, "'" + key + "' needs a finite number, got '" + s + "'");
-  return v;
+  const std::optional<double> v = parse_whole_double(s);
+  if (!v || !std::isfinite(*v)) fail(origin, line, "'" + key + "' needs a finite number, got '" + s + "'");
+  return *v;
 }
 
 std::array<double, 3> parse_triple(const std::string& s, const std::string& origin, int line,
@@ -46,16 +41,11 @@ std::array<double, 3> parse_triple(const std::string& s, const std::string& orig
 
 int parse_int(const std::string& s, const std::string& origin, int line,
               const std::string& key) {
-  size_t used = 0;
-  int v = 0;
-  try {
-    v = std::stoi(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != s.size() || s.empty())
+  const std::optional<long> v = parse_whole_long(s);
+  // std::stoi's range: an int, not a long.
+  if (!v || *v < std::numeric_limits<int>::min() || *v > std::numeric_limits<int>::max())
     fail(origin, line, "'" + key + "' needs an integer, got '" + s + "'");
-  return v;
+  return static_cast<int>(*v);
 }
 
 bool plain_word(const std::string& s) {
@@ -168,11 +158,9 @@ ComposeSpec parse_compose_spec(const std::string& text, const std::string& origi
 }
 
 ComposeSpec read_compose_spec(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open compose spec");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_compose_spec(ss.str(), path);
+  const std::optional<std::string> text = read_file(path);
+  if (!text) throw Error(path + ": cannot open compose spec");
+  return parse_compose_spec(*text, path);
 }
 
 std::string format_compose_spec(const ComposeSpec& spec) {

@@ -12,6 +12,7 @@
 
 #include "gemm_host.hpp"
 #include "op_util.hpp"
+#include "runtime/parse_number.hpp"
 
 namespace nova {
 
@@ -308,17 +309,10 @@ GemmConfig GemmConfig::parse(const std::string& text) {
     throw Error("'" + text + "' is no GEMM configuration (clblast|kernels|blocked|host KEY=VALUE...)");
   for (std::string item; in >> item;) {
     const size_t eq = item.find('=');
-    size_t used = 0;
-    unsigned long long v = 0;
-    try {
-      if (eq == std::string::npos || eq == 0) throw std::invalid_argument(item);
-      v = std::stoull(item.substr(eq + 1), &used);
-    } catch (const std::exception&) {
-      used = std::string::npos;
-    }
-    if (used != item.size() - eq - 1 || item[eq + 1] == '-')
-      throw Error("'" + text + "': '" + item + "' is not KEY=unsigned integer");
-    c.params[item.substr(0, eq)] = static_cast<size_t>(v);
+    const std::optional<unsigned long long> v =
+        eq == std::string::npos || eq == 0 ? std::nullopt : parse_whole_unsigned(item.substr(eq + 1));
+    if (!v || item[eq + 1] == '-') throw Error("'" + text + "': '" + item + "' is not KEY=unsigned integer");
+    c.params[item.substr(0, eq)] = static_cast<size_t>(*v);
   }
   if ((c.provider == "kernels" || c.provider == "host") && !c.params.empty())
     throw Error("'" + text + "': the " + c.provider + " provider takes no parameters");

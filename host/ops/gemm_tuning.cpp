@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "nova/gemm.hpp"
+#include "runtime/parse_number.hpp"
 
 namespace nova {
 namespace {
@@ -117,12 +118,8 @@ GemmShapeClass parse_shape(const std::string& text) {
 }
 
 double parse_gflops(const std::string& text) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(text, &used);
-    if (used == text.size() && v >= 0) return v;
-  } catch (const std::exception&) {
-  }
+  const std::optional<double> v = parse_whole_double(text);
+  if (v && *v >= 0) return *v;
   throw Error("'" + text + "' is not a GFLOP/s value");
 }
 

@@ -1,12 +1,11 @@
 #include "nova/run_folder.hpp"
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <utility>
 #include <vector>
 
 #include "nova/error.hpp"
+#include "runtime/read_file.hpp"
 
 namespace nova {
 
@@ -14,14 +13,12 @@ RunFiles RunFolder::read() const {
   namespace fs = std::filesystem;
   if (!fs::is_directory(dir_)) throw Error("run folder '" + dir_ + "' does not exist");
   const std::string cfg = config_path();
-  std::ifstream in(cfg);
-  if (!in) throw Error("run folder '" + dir_ + "' has no " + kConfigFile + " (not a nova run?)");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::optional<std::string> text = read_file(cfg);
+  if (!text) throw Error("run folder '" + dir_ + "' has no " + kConfigFile + " (not a nova run?)");
   std::vector<std::pair<std::string, std::string>> others;
   RunFiles r;
   r.dir = dir_;
-  r.config = parse_config_text(text.str(), cfg, &others, ConfigFile::RunFile);
+  r.config = parse_config_text(*text, cfg, &others, ConfigFile::RunFile);
   for (auto& [k, v] : others)
     if (k == "scene") r.scene = v;
   if (!fs::exists(checkpoint_path()))

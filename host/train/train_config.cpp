@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "nova/error.hpp"
+#include "runtime/parse_number.hpp"
 
 namespace nova {
 namespace {
@@ -35,14 +36,9 @@ long parse_int(const std::string& key, const std::string& text, long lo, long hi
 
 float parse_float(const std::string& key, const std::string& text, double lo, double hi) {
   const std::string v = trim(text);
-  size_t used = 0;
-  double x = 0;
-  try {
-    x = std::stod(v, &used);
-  } catch (const std::exception&) {
-    bad_value(key, text, "is not a number");
-  }
-  if (used != v.size()) bad_value(key, text, "is not a number");
+  const std::optional<double> parsed = parse_whole_double(v);
+  if (!parsed) bad_value(key, text, "is not a number");
+  const double x = *parsed;
   if (!std::isfinite(x)) bad_value(key, text, "is not finite");
   std::ostringstream range;
   range << "is out of range [" << lo << ", " << hi << "]";

@@ -49,7 +49,7 @@ Tensor sparsity_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {});
 Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Tensor noise = {},
                        size_t first_nerf = 0);
 
-// Free-space loss (kernels/depth_loss.cl): the weight each NeRF n >= first_nerf puts more than
+// Free-space loss (kernels/free_space.cl): the weight each NeRF n >= first_nerf puts more than
 // `margin` in front of the depth the disparity gives, on the rays of its mask, weighted by the
 // distance: mean over NeRFs n and rays r of valid_r mask_n(r) sum_i w_i max(0, z*_r - margin
 // - z_i), w = T alpha its own sample weights. The target z*_r = a + b target_r, (a, b) the
