@@ -13,6 +13,7 @@
 #include "nova/error.hpp"
 #include "nova/gemm.hpp"
 #include "nova/train_config.hpp"
+#include "nova/visualize.hpp"
 
 namespace nova::tradeoff {
 
@@ -184,25 +185,6 @@ std::string csv_text(const std::vector<Curve>& curves) {
   return out;
 }
 
-std::vector<double> nice_ticks(double lo, double hi, int target) {
-  if (!(hi > lo)) hi = lo + 1;
-  const double raw = (hi - lo) / target, mag = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (raw <= m * mag) {
-      step = m * mag;
-      break;
-    }
-  std::vector<double> out;
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step)
-    out.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
-  return out;
-}
-
-std::string tick_label(double v, double step) {
-  const int decimals = step >= 1 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
-  return fmt(v, decimals);
-}
 
 Image8 plot(const std::vector<Series>& series, const std::string& title, double level,
             int width, int height) {
@@ -230,18 +212,18 @@ Image8 plot(const std::vector<Series>& series, const std::string& title, double 
   const double pad = std::max(0.5, (y1 - y0) * 0.05);
   y0 -= pad;
   y1 += pad;
-  const std::vector<double> xt = nice_ticks(0, x1), yt = nice_ticks(y0, y1);
+  double xstep = 1, ystep = 1;
+  const std::vector<double> xt = axis_ticks(0, x1, 6, &xstep), yt = axis_ticks(y0, y1, 6, &ystep);
   x1 = std::max(x1, xt.back());
   y0 = std::min(y0, yt.front());
   y1 = std::max(y1, yt.back());
   const auto px = [&](double x) { return static_cast<int>(std::lround(left + (right - left) * x / x1)); };
   const auto py = [&](double y) { return static_cast<int>(std::lround(bottom - (bottom - top) * (y - y0) / (y1 - y0))); };
 
-  const double xstep = xt.size() > 1 ? xt[1] - xt[0] : 1, ystep = yt.size() > 1 ? yt[1] - yt[0] : 1;
   for (double x : xt) {
     cv::line(img, {px(x), top}, {px(x), bottom}, grid, 1);
     cv::line(img, {px(x), bottom}, {px(x), bottom + 5}, black, 1);
-    const std::string t = tick_label(x, xstep);
+    const std::string t = axis_tick_text(x, xstep);
     int base = 0;
     const cv::Size sz = cv::getTextSize(t, font, 0.45, 1, &base);
     cv::putText(img, t, {px(x) - sz.width / 2, bottom + 22}, font, 0.45, black, 1, cv::LINE_AA);
@@ -249,7 +231,7 @@ Image8 plot(const std::vector<Series>& series, const std::string& title, double 
   for (double y : yt) {
     cv::line(img, {left, py(y)}, {right, py(y)}, grid, 1);
     cv::line(img, {left - 5, py(y)}, {left, py(y)}, black, 1);
-    const std::string t = tick_label(y, ystep);
+    const std::string t = axis_tick_text(y, ystep);
     int base = 0;
     const cv::Size sz = cv::getTextSize(t, font, 0.45, 1, &base);
     cv::putText(img, t, {left - 9 - sz.width, py(y) + sz.height / 2}, font, 0.45, black, 1, cv::LINE_AA);

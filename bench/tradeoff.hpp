@@ -98,10 +98,6 @@ std::string csv_text(const std::vector<Curve>& curves);
 
 // ---- the plot -----------------------------------------------------------------------------
 
-// Tick values for [lo, hi]: about `target` steps of 1, 2 or 5 times a power of ten.
-std::vector<double> nice_ticks(double lo, double hi, int target = 6);
-
-std::string tick_label(double v, double step);
 
 // One polyline of the plot, under its legend label.
 struct Series {

@@ -207,12 +207,8 @@ BOOST_AUTO_TEST_CASE(forward_matches_reference) {
 BOOST_AUTO_TEST_CASE(extend_changes_only_points_outside_the_box) {
   // Inside the box both modes read the same vertices with the same weights, bit for bit;
   // outside, hashed levels differ (their own cells) while dense levels still clamp.
-  HashGridConfig c;
-  c.levels = 4;
-  c.features = 2;
-  c.log2_size = 11;
-  c.min_resolution = 4;
-  c.max_resolution = 64;  // levels 4 and 10 dense (<= 2048 vertices), 25 and 64 hashed
+  // Levels of 4 and 10 cells are dense (<= 2048 vertices), 25 and 64 hashed.
+  HashGridConfig c{.levels = 4, .features = 2, .log2_size = 11, .min_resolution = 4, .max_resolution = 64};
   const size_t rows = 64, L = 4, F = 2;
   std::vector<float> pos = test_positions(rows, 3, 1.0f, 11);
   // Even rows inside the box (test_positions draws +-1.3 b), odd rows beyond x = 1.

@@ -8,6 +8,7 @@
 
 #include "../bench/tradeoff.hpp"
 #include "nova/image_io.hpp"
+#include "nova/visualize.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {
@@ -146,8 +147,13 @@ BOOST_AUTO_TEST_CASE(csv_and_plot) {
              "width-64,quick,0,0,0.000,11.5000,0.25000,0.0\n"
              "width-64,quick,1,500,12.346,20.2500,0.50000,10376.9\n");
 
-  BOOST_TEST(nice_ticks(0, 430) == (std::vector<double>{0, 100, 200, 300, 400}));
-  BOOST_TEST(nice_ticks(18.5, 29.2) == (std::vector<double>{20, 22, 24, 26, 28}));
+  double step = 0;
+  BOOST_TEST(nova::axis_ticks(0, 430, 6, &step) == (std::vector<double>{0, 100, 200, 300, 400}));
+  BOOST_TEST(step == 100.0);
+  BOOST_TEST(nova::axis_ticks(18.5, 29.2, 6, &step) == (std::vector<double>{20, 22, 24, 26, 28}));
+  BOOST_TEST(nova::axis_tick_text(22, step) == "22");
+  nova::axis_ticks(0.1, 0.9, 6, &step);
+  BOOST_TEST(nova::axis_tick_text(0.4, step) == "0.4");
 
   // Two series: each colour is drawn (Tableau blue and orange, RGB), the axes are black,
   // and the PNG reads back at its size.

@@ -203,26 +203,6 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
-// About `target` ticks over [lo, hi] at 1, 2 or 5 times a power of ten.
-std::vector<double> ticks(double lo, double hi, int target, double* step_out) {
-  if (!(hi > lo)) hi = lo + 1;
-  const double raw = (hi - lo) / target, mag = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = 10 * mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (raw <= m * mag) {
-      step = m * mag;
-      break;
-    }
-  std::vector<double> out;
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step)
-    out.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
-  *step_out = step;
-  return out;
-}
-
-std::string tick_text(double v, double step) {
-  return fixed(v, step >= 1 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
-}
 
 Image8 from_bgr(const cv::Mat& img) {
   Image8 out(img.cols, img.rows, 3);
@@ -260,7 +240,7 @@ void draw_y_axis(cv::Mat& img, const Frame2D& f, const std::vector<double>& yt, 
   for (double y : yt) {
     cv::line(img, {f.left, f.py(y)}, {f.right, f.py(y)}, grid, 1);
     cv::line(img, {f.left - 5, f.py(y)}, {f.left, f.py(y)}, black, 1);
-    const std::string t = tick_text(y, ystep);
+    const std::string t = axis_tick_text(y, ystep);
     int base = 0;
     const cv::Size sz = cv::getTextSize(t, kFont, 0.45, 1, &base);
     cv::putText(img, t, {f.left - 9 - sz.width, f.py(y) + sz.height / 2}, kFont, 0.45, black, 1, cv::LINE_AA);
@@ -299,6 +279,26 @@ cv::Mat to_bgr(const Image8& im) {
 
 }  // namespace
 
+std::vector<double> axis_ticks(double lo, double hi, int target, double* step_out) {
+  if (!(hi > lo)) hi = lo + 1;
+  const double raw = (hi - lo) / target, mag = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = 10 * mag;
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (raw <= m * mag) {
+      step = m * mag;
+      break;
+    }
+  std::vector<double> out;
+  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step)
+    out.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
+  *step_out = step;
+  return out;
+}
+
+std::string axis_tick_text(double v, double step) {
+  return fixed(v, step >= 1 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
+}
+
 Image8 plot_bar_groups(const std::vector<BarGroup>& groups, const std::string& title, const std::string& y_label,
                        int decimals, int width, int height) {
   cv::Mat img(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
@@ -311,7 +311,7 @@ Image8 plot_bar_groups(const std::vector<BarGroup>& groups, const std::string& t
       if (std::isfinite(v)) vmax = std::max(vmax, v);
     }
   double ystep = 1;
-  const std::vector<double> yt = ticks(0, vmax > 0 ? vmax * 1.08 : 1, 6, &ystep);
+  const std::vector<double> yt = axis_ticks(0, vmax > 0 ? vmax * 1.08 : 1, 6, &ystep);
   Frame2D f{70, width - 20, 45, height - 75, 0, std::max(yt.back(), vmax * 1.08)};
   if (!(f.y1 > 0)) f.y1 = 1;
   draw_y_axis(img, f, yt, ystep);
@@ -362,7 +362,7 @@ Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& 
   if (!std::isfinite(y0)) y0 = 0, y1 = 1;
   const double pad = std::max(0.5, (y1 - y0) * 0.08);
   double xstep = 1, ystep = 1;
-  const std::vector<double> xt = ticks(0, x1 > 0 ? x1 * 1.05 : 1, 6, &xstep), yt = ticks(y0 - pad, y1 + pad, 6, &ystep);
+  const std::vector<double> xt = axis_ticks(0, x1 > 0 ? x1 * 1.05 : 1, 6, &xstep), yt = axis_ticks(y0 - pad, y1 + pad, 6, &ystep);
   Frame2D f{70, width - 20, 45, height - 55, std::min(y0 - pad, yt.front()), std::max(y1 + pad, yt.back())};
   const double xmax = std::max(xt.back(), x1 > 0 ? x1 * 1.05 : 1);
   const auto px = [&](double x) { return static_cast<int>(std::lround(f.left + (f.right - f.left) * x / xmax)); };
@@ -370,7 +370,7 @@ Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& 
   for (double x : xt) {
     cv::line(img, {px(x), f.top}, {px(x), f.bottom}, grid, 1);
     cv::line(img, {px(x), f.bottom}, {px(x), f.bottom + 5}, black, 1);
-    centred_text(img, tick_text(x, xstep), px(x), f.bottom + 20, 0.45, black);
+    centred_text(img, axis_tick_text(x, xstep), px(x), f.bottom + 20, 0.45, black);
   }
   cv::rectangle(img, {f.left, f.top}, {f.right, f.bottom}, black, 1);
   for (size_t gi = 0; gi < groups.size(); ++gi)

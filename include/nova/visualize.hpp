@@ -46,6 +46,12 @@ void write_video(const std::vector<Image8>& frames, const std::string& path, dou
 
 // ---- charts and picture sheets (RGB, white background, Tableau 10 colours) ----------------
 
+// About `target` tick values over [lo, hi], at a step of 1, 2 or 5 times a power of ten (a
+// multiple of the step, exact 0 where it falls); the step goes to *step_out.
+std::vector<double> axis_ticks(double lo, double hi, int target, double* step_out);
+// A tick value with as many decimals as the step needs.
+std::string axis_tick_text(double v, double step);
+
 // Bars in groups (e.g. scenes grouped by set): group g's bars in colour g, each bar labelled
 // beneath with its name and above with its value (`decimals`), the group's label under its
 // bars; the y axis runs from 0 to above the largest value, with ticks. Non-finite values
