@@ -259,7 +259,9 @@ int devices(const Args& args) {
     std::cout << o.usage("nova-bench devices") << "\n--devices: all, or ids/names separated by ','\n";
     return 0;
   }
-  for (const char* k : {"batch", "depth", "width", "repeats", "check-rows", "composite-rays"})
+  // Counts every device run takes (all >= 1), handed on to each child with the step counts.
+  const std::vector<const char*> counts = {"batch", "depth", "width", "repeats", "check-rows", "composite-rays"};
+  for (const char* k : counts)
     if (o.integer(k) < 1) throw Error(std::string("--") + k + " must be >= 1");
   if (o.integer("pretrain-steps") < 0 || o.integer("steps") < 1 || o.integer("pretrain-steps") + o.integer("steps") < 2)
     throw Error("--pretrain-steps must be >= 0, --steps >= 1, and the two at least 2 (the first step is not timed)");
@@ -293,8 +295,8 @@ int devices(const Args& args) {
     const fs::path res = work / ("device-" + d.id() + ".txt"), err = work / ("device-" + d.id() + ".err");
     std::ostringstream cmd;
     cmd << "'" << self << "' devices --one " << d.id() << " --result '" << res.string() << "' --scene '" << scene << "'";
-    for (const char* k : {"batch", "depth", "width", "repeats", "check-rows", "composite-rays", "pretrain-steps", "steps"})
-      cmd << " --" << k << " " << o.integer(k);
+    for (const char* k : counts) cmd << " --" << k << " " << o.integer(k);
+    for (const char* k : {"pretrain-steps", "steps"}) cmd << " --" << k << " " << o.integer(k);
     cmd << " > /dev/null 2> '" << err.string() << "'";
     std::cerr << "device " << d.id() << " (" << d.name << ") ..." << std::endl;
     const int status = std::system(cmd.str().c_str());

@@ -10,10 +10,12 @@
 #include <cstdlib>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
 #include "nova/error.hpp"
+#include "runtime/parse_number.hpp"
 
 #ifdef NOVA_WITH_MPI
 #include <mpi.h>
@@ -197,11 +199,10 @@ int run_as_ranks(const char* command, const std::vector<std::string>& args,
 double training_wait_limit() {
   const char* v = std::getenv("NOVA_MPI_TIMEOUT");
   if (!v || !*v) return 600.0;
-  char* end = nullptr;
-  const double s = std::strtod(v, &end);
-  if (end == v || *end != '\0' || !std::isfinite(s) || s < 0)
+  const std::optional<double> s = parse_whole_double(v);
+  if (!s || !std::isfinite(*s) || *s < 0)
     throw Error(std::string("NOVA_MPI_TIMEOUT='") + v + "': expected seconds (a number >= 0; 0: no limit)", kExitUsage);
-  return s;
+  return *s;
 }
 
 DeviceInfo rank_device(const std::string& selector) {
