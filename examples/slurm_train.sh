@@ -1,12 +1,18 @@
 #!/bin/bash
-# A batch job that trains a NOVA scene on one GPU and survives preemption: Slurm requeues it,
-# and the next run continues from the last checkpoint (written atomically every
+# A batch job that trains a NOVA scene with one rank per GPU and survives preemption: Slurm
+# requeues it, and the next run continues from the last checkpoint (written atomically every
 # --checkpoint-every steps) with `nova train --resume`, bit for bit as if never stopped.
 #
 #   sbatch examples/slurm_train.sh SCENE_DIR RUN_DIR [nova train options...]
+#   sbatch --nodes=2 --ntasks-per-node=4 --gpus-per-task=1 examples/slurm_train.sh ...
 #
+# With more than one task the ranks train data-parallel (nova built with MPI): every rank
+# takes the GPU of its node-local rank, and a requeued job must keep the same number of tasks
+# (a run resumes for the same N). `rays` must divide by the number of tasks. A checkpoint is
+# written every NOVA_CHECKPOINT_EVERY steps (200): what a requeue can lose.
 #SBATCH --job-name=nova-train
-#SBATCH --gres=gpu:1
+#SBATCH --ntasks=1
+#SBATCH --gpus-per-task=1
 #SBATCH --cpus-per-task=4
 #SBATCH --time=04:00:00
 #SBATCH --requeue
@@ -17,18 +23,26 @@ scene=${1:?usage: sbatch slurm_train.sh SCENE_DIR RUN_DIR [options]}
 run=${2:?usage: sbatch slurm_train.sh SCENE_DIR RUN_DIR [options]}
 shift 2
 nova=${NOVA:-nova}  # an installed nova (cmake --install) on PATH, or NOVA=/path/to/nova
+tasks=${SLURM_NTASKS:-1}
+echo "job ${SLURM_JOB_ID:-?} (restart ${SLURM_RESTART_COUNT:-0}) on $(hostname): $tasks task(s)"
 
-# nova takes the first GPU it finds; NOVA_DEVICE may name another (`nova devices` lists them).
 # Tune the GEMMs once per GPU model (the cache is per device and driver; later jobs reuse it).
+# NOVA_TUNE=0 skips it (a CPU device uses its host BLAS and needs none).
 export NOVA_TUNING_CACHE=${NOVA_TUNING_CACHE:-$HOME/.cache/nova/gemm-tuning.tsv}
-if [ ! -s "$NOVA_TUNING_CACHE" ]; then
+if [ "${NOVA_TUNE:-1}" != 0 ] && [ ! -s "$NOVA_TUNING_CACHE" ]; then
   "$nova" tune --quick --widths 64 --inputs 32 --batch 4096
 fi
 
+# One rank per task: Open MPI's mpirun starts them through Slurm (a plain srun starts lone
+# processes unless Slurm and the MPI share a PMI; nova refuses that). Each rank takes the GPU
+# of its node-local rank (NOVA_DEVICE may name another; `nova devices` lists them).
+launch=()
+if [ "$tasks" -gt 1 ]; then launch=(mpirun -np "$tasks"); fi
+
 if [ -f "$run/checkpoint.bin" ]; then
   echo "resuming $run"
-  "$nova" train --scene "$scene" --out "$run" --resume "$@"
+  "${launch[@]}" "$nova" train --scene "$scene" --out "$run" --resume "$@"
 else
-  "$nova" train --scene "$scene" --out "$run" --checkpoint-every 200 "$@"
+  "${launch[@]}" "$nova" train --scene "$scene" --out "$run" --checkpoint-every "${NOVA_CHECKPOINT_EVERY:-200}" "$@"
 fi
-"$nova" eval --run "$run"
+"${launch[@]}" "$nova" eval --run "$run"

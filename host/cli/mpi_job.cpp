@@ -169,6 +169,12 @@ class Mpi final : public MpiJob {
 
 std::unique_ptr<MpiJob> start_mpi_job() {
   const int n = launched_size();
+  // srun without a PMI that this MPI speaks starts every task as a lone process: each would
+  // train alone and all would write the same run folder.
+  if (const int tasks = env_int("SLURM_STEP_NUM_TASKS", 0); n == 0 && tasks > 1)
+    throw Error("srun started " + std::to_string(tasks) + " tasks, but no MPI launcher told this nova of the others "
+                "(each would train alone into the same folder): start the ranks with mpirun inside the allocation, "
+                "or with srun --mpi=PLUGIN where Slurm and this MPI share a PMI");
   if (n == 0) return nullptr;
 #ifdef NOVA_WITH_MPI
   return std::make_unique<Mpi>();

@@ -178,6 +178,12 @@ std::vector<ConfigOption> make_options() {
                            [](TrainConfig& c) -> float& { return c.lr_decay; }));
   o.push_back(int_option("lr-decay-steps", "steps over which the learning rate falls by lr-decay", 1, kBig,
                          [](TrainConfig& c) -> int& { return c.lr_decay_steps; }));
+  o.push_back(float_option("adam-beta2", "Adam's decay of the squared-gradient average", 0.0, 0.999999,
+                           [](TrainConfig& c) -> float& { return c.adam.beta2; }));
+  o.back().before = "0.999";
+  o.push_back(float_option("adam-eps", "Adam's epsilon (added to the root of the squared-gradient average)", 0.0, 1.0,
+                           [](TrainConfig& c) -> float& { return c.adam.eps; }));
+  o.back().before = "1e-08";
   o.push_back(bool_option("augment", "novel-view augmentation of the object cameras",
                           [](TrainConfig& c) -> bool& { return c.augment; }));
   o.push_back(int_option("augment-every", "every n-th joint step is augmented", 1, kBig,

@@ -144,7 +144,7 @@ void Trainer::ensure_phase() {
   exec_ = std::move(e);
   for (auto& pack : {graph_->pack_static, graph_->pack_objects})
     if (pack) pack->grids = occupancy_ ? occupancy_->grids() : nullptr;
-  adam_ = std::make_unique<Adam>(rt_, exec_->parameter_floats());
+  adam_ = std::make_unique<Adam>(rt_, exec_->parameter_floats(), config_.adam);
   graph_joint_ = joint;
 }
 

@@ -9,6 +9,7 @@
 
 #include "nova/losses.hpp"
 #include "nova/model_config.hpp"
+#include "nova/optim.hpp"
 
 namespace nova {
 
@@ -25,6 +26,7 @@ struct TrainConfig : ModelConfig {
   float lr = 5e-4f;
   float lr_decay = 0.1f;          // lr(s) = lr * lr_decay^(s / lr_decay_steps), s per phase
   int lr_decay_steps = 300000;
+  AdamConfig adam;               // moment decays and epsilon
   // Novel-view augmentation.
   bool augment = true;
   int augment_every = 3;         // every n-th joint step is augmented
