@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -258,48 +259,49 @@ void parse_csv(const std::string& text, std::vector<SceneResult>* results, std::
   }
 }
 
-std::string json_string(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\', o += c;
-    else if (c == '\n') o += "\\n";
-    else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
-    else o += c;
-  }
-  return o + "\"";
-}
+namespace {
 
-std::string json_number(double v, int decimals) { return std::isfinite(v) ? num(v, decimals) : "null"; }
+// A number as accuracy.json keeps it: rounded to `decimals` as the table and the CSV show it,
+// which the JSON writer prints as the shortest text that reads back the same; missing
+// (non-finite) numbers are written as null.
+double json_number(double v, int decimals) { return std::isfinite(v) ? std::stod(num(v, decimals)) : v; }
+
+}  // namespace
 
 std::string json_text(const std::vector<std::pair<std::string, std::string>>& settings,
                       const std::vector<SceneResult>& results, const std::vector<SetSummary>& sets) {
-  std::ostringstream o;
-  o << "{\n  \"configuration\": {";
-  for (size_t i = 0; i < settings.size(); ++i)
-    o << (i ? ", " : "") << json_string(settings[i].first) << ": " << json_string(settings[i].second);
-  o << "},\n  \"scenes\": [";
-  for (size_t i = 0; i < results.size(); ++i) {
-    const SceneResult& r = results[i];
-    o << (i ? ",\n    " : "\n    ") << "{\"name\": " << json_string(r.name) << ", \"set\": " << json_string(r.set)
-      << ", \"status\": " << json_string(r.status) << ", \"steps\": " << r.steps
-      << ", \"train_seconds\": " << json_number(r.train_s, 3) << ", \"eval_seconds\": " << json_number(r.eval_s, 3)
-      << ", \"cam0_psnr\": " << json_number(r.cam0_psnr, 4) << ", \"cam0_ssim\": " << json_number(r.cam0_ssim, 5)
-      << ", \"cam0_views\": " << r.cam0_views << ", \"heldout_psnr\": " << json_number(r.heldout_psnr, 4)
-      << ", \"heldout_ssim\": " << json_number(r.heldout_ssim, 5) << ", \"heldout_views\": " << r.heldout_views
-      << ", \"compose_psnr\": " << json_number(r.compose_psnr, 4) << ", \"compose_views\": " << r.compose_views << "}";
-  }
-  o << "\n  ],\n  \"sets\": [";
-  for (size_t i = 0; i < sets.size(); ++i) {
-    const SetSummary& s = sets[i];
-    o << (i ? ",\n    " : "\n    ") << "{\"set\": " << json_string(s.set) << ", \"scenes\": " << s.scenes
-      << ", \"mean_cam0_psnr\": " << json_number(s.mean_cam0_psnr, 4)
-      << ", \"min_cam0_psnr\": " << json_number(s.min_cam0_psnr, 4)
-      << ", \"mean_heldout_psnr\": " << json_number(s.mean_heldout_psnr, 4)
-      << ", \"mean_compose_psnr\": " << json_number(s.mean_compose_psnr, 4)
-      << ", \"total_train_seconds\": " << json_number(s.total_train_s, 3) << "}";
-  }
-  o << "\n  ]\n}\n";
-  return o.str();
+  nlohmann::ordered_json configuration = nlohmann::ordered_json::object();
+  for (const auto& [key, value] : settings) configuration[key] = value;
+  nlohmann::ordered_json scenes = nlohmann::ordered_json::array();
+  for (const SceneResult& r : results)
+    scenes.push_back({{"name", r.name},
+                      {"set", r.set},
+                      {"status", r.status},
+                      {"steps", r.steps},
+                      {"train_seconds", json_number(r.train_s, 3)},
+                      {"eval_seconds", json_number(r.eval_s, 3)},
+                      {"cam0_psnr", json_number(r.cam0_psnr, 4)},
+                      {"cam0_ssim", json_number(r.cam0_ssim, 5)},
+                      {"cam0_views", r.cam0_views},
+                      {"heldout_psnr", json_number(r.heldout_psnr, 4)},
+                      {"heldout_ssim", json_number(r.heldout_ssim, 5)},
+                      {"heldout_views", r.heldout_views},
+                      {"compose_psnr", json_number(r.compose_psnr, 4)},
+                      {"compose_views", r.compose_views}});
+  nlohmann::ordered_json set_rows = nlohmann::ordered_json::array();
+  for (const SetSummary& s : sets)
+    set_rows.push_back({{"set", s.set},
+                        {"scenes", s.scenes},
+                        {"mean_cam0_psnr", json_number(s.mean_cam0_psnr, 4)},
+                        {"min_cam0_psnr", json_number(s.min_cam0_psnr, 4)},
+                        {"mean_heldout_psnr", json_number(s.mean_heldout_psnr, 4)},
+                        {"mean_compose_psnr", json_number(s.mean_compose_psnr, 4)},
+                        {"total_train_seconds", json_number(s.total_train_s, 3)}});
+  nlohmann::ordered_json json;
+  json["configuration"] = std::move(configuration);
+  json["scenes"] = std::move(scenes);
+  json["sets"] = std::move(set_rows);
+  return json.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace nova::accuracy

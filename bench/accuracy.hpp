@@ -121,10 +121,7 @@ std::vector<std::string> split_csv_line(const std::string& line);
 // on anything else.
 void parse_csv(const std::string& text, std::vector<SceneResult>* results, std::vector<SetSummary>* sets);
 
-std::string json_string(const std::string& s);
-std::string json_number(double v, int decimals);
-
-// {"preset", "config", "set", "scenes": [...], "sets": [...]}; missing numbers are null.
+// {"configuration": {...}, "scenes": [...], "sets": [...]}; missing numbers are null.
 // `settings`: the configuration every scene got (preset, config file, --set), as given.
 std::string json_text(const std::vector<std::pair<std::string, std::string>>& settings,
                       const std::vector<SceneResult>& results, const std::vector<SetSummary>& sets);

@@ -26,21 +26,22 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 
 #include "bench.hpp"
 #include "composite_problem.hpp"
-#include "nova/evaluation.hpp"
 #include "nova/executor.hpp"
-#include "nova/image_io.hpp"
+#include "nova/io/evaluation.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/scene_io.hpp"
+#include "nova/io/synth.hpp"
+#include "nova/io/visualize.hpp"
 #include "nova/mlp.hpp"
 #include "nova/ops.hpp"
 #include "nova/runtime.hpp"
-#include "nova/scene_io.hpp"
-#include "nova/synth.hpp"
 #include "nova/trainer.hpp"
-#include "nova/visualize.hpp"
 #include "options.hpp"
 
 namespace nova::bench {
@@ -339,7 +340,9 @@ int devices(const Args& args) {
     else s << std::fixed << std::setprecision(k == "mlp_samples_s" || k == "composite_samples_s" || k == "device_mb" ? 0 : k == "train_s_per_step" || k == "view_s" ? 3 : 2) << x;
     return s.str();
   };
-  std::ostringstream md, csv, json;
+  std::ostringstream md, csv;
+  // Every value a string, as the CSV has it (empty where a stage did not run).
+  nlohmann::ordered_json devices = nlohmann::ordered_json::array();
   md << "| id |";
   csv << "id";
   for (const auto& [k, h] : cols) md << " " << h << " |", csv << "," << k;
@@ -347,27 +350,25 @@ int devices(const Args& args) {
   csv << "\n";
   for (size_t i = 0; i < cols.size(); ++i) md << "---|";
   md << "\n";
-  json << "{\n  \"devices\": [\n";
   for (size_t i = 0; i < rows.size(); ++i) {
     const auto& [d, r] = rows[i];
     md << "| " << d.id() << " |";
     csv << d.id();
-    json << "    {\"id\": \"" << d.id() << "\"";
+    nlohmann::ordered_json row;
+    row["id"] = d.id();
     for (const auto& [k, h] : cols) {
       const std::string v = get(r, k);
       md << " " << shown(k, v) << " |";
       std::string q = v;
       std::replace(q.begin(), q.end(), ',', ';');
       csv << "," << q;
-      std::string j;
-      for (char c : v) j += c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c);
-      json << ", \"" << k << "\": \"" << j << "\"";
+      row[k] = v;
     }
     md << "\n";
     csv << "\n";
-    json << "}" << (i + 1 < rows.size() ? "," : "") << "\n";
+    devices.push_back(std::move(row));
   }
-  json << "  ]\n}\n";
+  const nlohmann::ordered_json json = {{"devices", std::move(devices)}};
   std::cout << md.str();
   fs::create_directories(out);
   auto write = [&](const std::string& name, const std::string& text) {
@@ -376,7 +377,7 @@ int devices(const Args& args) {
   };
   write("devices.md", md.str());
   write("devices.csv", csv.str());
-  write("devices.json", json.str());
+  write("devices.json", json.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
   std::vector<BarGroup> speed, error;
   for (const auto& [d, r] : rows) {
     BarGroup s{d.id(), {}}, e{d.id(), {}};

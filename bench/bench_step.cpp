@@ -15,8 +15,8 @@
 #include <sstream>
 
 #include "bench.hpp"
+#include "nova/io/scene_io.hpp"
 #include "nova/runtime.hpp"
-#include "nova/scene_io.hpp"
 #include "nova/train_config.hpp"
 #include "nova/trainer.hpp"
 #include "options.hpp"

@@ -14,9 +14,9 @@
 #include <sstream>
 
 #include "bench.hpp"
+#include "nova/io/scene_io.hpp"
 #include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
-#include "nova/scene_io.hpp"
 #include "nova/view_renderer.hpp"
 #include "options.hpp"
 

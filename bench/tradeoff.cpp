@@ -12,8 +12,8 @@
 
 #include "nova/error.hpp"
 #include "nova/gemm.hpp"
+#include "nova/io/visualize.hpp"
 #include "nova/train_config.hpp"
-#include "nova/visualize.hpp"
 
 namespace nova::tradeoff {
 

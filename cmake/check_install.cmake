@@ -1,6 +1,7 @@
 # The installed package works for a program outside nova's tree (examples/CMakeLists.txt runs
 # this as the CTest test install_package):
-#   1. cmake --install BUILD_DIR --prefix WORK_DIR/prefix
+#   1. cmake --install BUILD_DIR --prefix WORK_DIR/prefix: the I/O headers in include/nova/io/,
+#      the core's in include/nova/, and no package file naming nlohmann-json
 #   2. examples/ configured on its own with CMAKE_PREFIX_PATH=prefix (find_package(nova CONFIG)),
 #      built, and embed_core run
 #   3. embed_core.cpp compiled with `pkg-config --cflags --libs nova` against the prefix, and run
@@ -20,6 +21,26 @@ step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix
 foreach(f lib/cmake/nova/nova-config.cmake lib/pkgconfig/nova.pc include/nova/runtime.hpp lib/libnova_core.a)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "the install has no ${f}")
+  endif()
+endforeach()
+# Core and I/O headers apart, as in the tree: include/nova/io/ only where nova_io was built.
+file(GLOB io_headers RELATIVE ${SOURCE_DIR}/include ${SOURCE_DIR}/include/nova/io/*.hpp)
+if(EXISTS ${prefix}/lib/libnova_io.a)
+  foreach(f IN LISTS io_headers)
+    get_filename_component(name ${f} NAME)
+    if(NOT EXISTS ${prefix}/include/${f} OR EXISTS ${prefix}/include/nova/${name})
+      message(FATAL_ERROR "the install does not keep ${f} apart: include/${f} missing or include/nova/${name} there")
+    endif()
+  endforeach()
+elseif(EXISTS ${prefix}/include/nova/io)
+  message(FATAL_ERROR "the install has include/nova/io without libnova_io.a")
+endif()
+# JSON is a build-time dependency only: the package and the pkg-config files do not name it.
+file(GLOB_RECURSE package_files ${prefix}/lib/cmake/nova/*.cmake ${prefix}/lib/pkgconfig/*.pc)
+foreach(f IN LISTS package_files)
+  file(READ ${f} text)
+  if(text MATCHES "nlohmann")
+    message(FATAL_ERROR "${f} names nlohmann-json, which the installed nova must not require")
   endif()
 endforeach()
 

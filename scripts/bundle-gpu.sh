@@ -6,6 +6,7 @@
 #   usr/include/CL, usr/lib/.../libOpenCL.so*   OpenCL headers and the ocl-icd ICD loader
 #   usr/include/clblast*.h, libclblast.so*      CLBlast (GEMMs) and its CMake package
 #   usr/include/boost (Boost.Test's headers only), libboost_unit_test_framework.so*
+#   usr/include/nlohmann, usr/share/cmake/nlohmann_json   nlohmann-json (header-only: metrics.jsonl)
 #   env.sh                                      CMake arguments and the NVIDIA ICD set-up
 #
 # Not bundled: OpenCV (nova_io, the CLI and its suites are left out there: NOVA_BUILD_IO=OFF),
@@ -26,6 +27,7 @@ PACKAGES=(
   libboost-test1.74.0    # libboost_unit_test_framework.so.1.74.0
   libboost-test1.74-dev  # its link-time name and CMake package (static libraries dropped)
   libboost1.74-dev       # Boost headers and CMake packages, trimmed to what Boost.Test needs
+  nlohmann-json3-dev     # JSON headers and their CMake package (the trainer writes metrics.jsonl)
 )
 
 for tool in apt-get dpkg-deb g++; do
@@ -55,9 +57,11 @@ root="$work/root"
 for deb in "$work"/*.deb; do dpkg-deb -x "$deb" "$root"; done
 
 rm -rf "$OUT/usr" "$OUT/vendors"
-mkdir -p "$OUT/usr/include" "$OUT/usr/lib/$ARCH/cmake" "$OUT/usr/share/doc"
+mkdir -p "$OUT/usr/include" "$OUT/usr/lib/$ARCH/cmake" "$OUT/usr/share/doc" "$OUT/usr/share/cmake"
 lib="$root/usr/lib/$ARCH"
-cp -a "$root/usr/include/CL" "$root"/usr/include/clblast*.h "$OUT/usr/include/"
+cp -a "$root/usr/include/CL" "$root"/usr/include/clblast*.h "$root/usr/include/nlohmann" "$OUT/usr/include/"
+# Found through CMAKE_PREFIX_PATH (<prefix>/share/cmake/nlohmann_json); its paths are relative.
+cp -a "$root/usr/share/cmake/nlohmann_json" "$OUT/usr/share/cmake/"
 cp -a "$lib"/libOpenCL.so* "$lib"/libclblast.so* "$lib"/libboost_unit_test_framework.so* "$OUT/usr/lib/$ARCH/"
 cp -a "$lib/cmake/CLBlast" "$lib/cmake/Boost-1.74.0" "$lib/cmake/boost_headers-1.74.0" \
       "$lib/cmake/boost_unit_test_framework-1.74.0" "$lib/cmake/BoostDetectToolset-1.74.0.cmake" \

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Proves that a build from bundle/ needs nothing else from Debian: in a private mount
 # namespace (unshare -m, root), empty directories and files are bound over the system's
-# OpenCL, CLBlast, Boost, OpenCV and OpenBLAS headers, libraries and CMake/pkg-config
-# packages; scripts/gpu-build.sh then builds nova's core, nova-bench, embed_core and the core
-# suites, ldd must resolve libOpenCL and libclblast into the bundle, and the binaries run on
-# PoCL (not bundled: its ICD entry and library stay visible for the run). It also checks
-# env.sh's NVIDIA ICD set-up against a stand-in driver library.
+# OpenCL, CLBlast, Boost, nlohmann-json, OpenCV and OpenBLAS headers, libraries and
+# CMake/pkg-config packages; scripts/gpu-build.sh then builds nova's core, nova-bench,
+# embed_core and the core suites, ldd must resolve libOpenCL and libclblast into the bundle,
+# and the binaries run on PoCL (not bundled: its ICD entry and library stay visible for the
+# run). It also checks env.sh's NVIDIA ICD set-up against a stand-in driver library.
 # Usage (as root, after scripts/bundle-gpu.sh):
 #   bash scripts/check-bundle.sh [BUILD_DIR] [--quick] [--reuse]
 #     BUILD_DIR  default build-bundle-check (git-ignored)
@@ -52,6 +52,7 @@ hide() {
 }
 L=/usr/lib/x86_64-linux-gnu
 hide /usr/include/CL /usr/include/boost /usr/include/opencv4 /usr/include/clblast*.h \
+     /usr/include/nlohmann /usr/share/cmake/nlohmann_json \
      /usr/include/x86_64-linux-gnu/cblas*.h /usr/include/x86_64-linux-gnu/openblas* \
      $L/cmake $L/pkgconfig /usr/share/pkgconfig \
      $L/libOpenCL.so* $L/libclblast.so* $L/libclblast.a $L/libboost_* $L/libopencv_* \

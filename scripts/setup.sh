@@ -8,6 +8,7 @@ PACKAGES=(
   g++ cmake pkg-config
   ocl-icd-libopencl1 ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
   libclblast-dev
+  nlohmann-json3-dev  # JSON (header-only): scene readers, metrics.jsonl, eval.json, bench outputs
   libopencv-dev
   zlib1g-dev        # .npz scenes (deflated ZIP members)
   libboost-program-options-dev libboost-test-dev

@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "nova/error.hpp"
-#include "nova/synth.hpp"
+#include "nova/io/synth.hpp"
 
 namespace nova::test {
 

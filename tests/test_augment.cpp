@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "nova/augment.hpp"
-#include "nova/synth.hpp"
+#include "nova/io/synth.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -2,8 +2,8 @@
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 
-#include "nova/compose_spec.hpp"
 #include "nova/error.hpp"
+#include "nova/io/compose_spec_text.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

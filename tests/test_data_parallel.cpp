@@ -16,8 +16,8 @@
 
 #include "harness.hpp"
 #include "nova/distributed.hpp"
+#include "nova/io/scene_io.hpp"
 #include "nova/run_folder.hpp"
-#include "nova/scene_io.hpp"
 #include "nova/trainer.hpp"
 #include "scene_test_util.hpp"
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "nova/npy.hpp"
+#include "nova/io/npy.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "harness.hpp"
+#include "nova/io/scene_io.hpp"
 #include "nova/nova_fields.hpp"
 #include "nova/nova_graphs.hpp"
 #include "nova/object_centre.hpp"
-#include "nova/scene_io.hpp"
 #include "nova/train_config.hpp"
 #include "nova/view_renderer.hpp"
 #include "scene_test_util.hpp"

@@ -5,11 +5,11 @@
 #include <cmath>
 #include <limits>
 
-#include "nova/image_io.hpp"
-#include "nova/llff_poses.hpp"
-#include "nova/npy.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/llff_poses.hpp"
+#include "nova/io/npy.hpp"
+#include "nova/io/scene_io.hpp"
 #include "nova/nova_graphs.hpp"
-#include "nova/scene_io.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;
@@ -210,6 +210,37 @@ BOOST_AUTO_TEST_CASE(bad_missing_frame) {
   fs::remove(dir / "images" / "005.png");
   expect_error([&] { load_scene(dir.string()); },
                {"images", "9 images", "poses_bounds.npy has 10 rows", "missing frames"});
+}
+
+// A transforms_train.json that does not parse, or parses without what the reader needs, is
+// refused naming the file (and for a syntax error its line, for a frame its index).
+BOOST_AUTO_TEST_CASE(bad_blender_json) {
+  TempDir tmp("bad-blender");
+  const fs::path dir = tmp.path();
+  fs::create_directories(dir / "train");
+  write_png((dir / "train" / "r_0.png").string(), Image8(8, 6, 3, 100));
+  const std::string json = (dir / "transforms_train.json").string();
+  const std::string frame = R"({"file_path": "./train/r_0", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]})";
+  const auto expect = [&](const std::string& text, const std::vector<std::string>& parts) {
+    write_all(json, text);
+    expect_error([&] { load_scene(dir.string()); }, parts);
+  };
+  expect("{\"camera_angle_x\": 0.69,\n\"frames\": [}\n", {json + ":2: bad JSON ("});
+  expect("{\"camera_angle_x\": 0.69, \"frames\": [" + frame, {json + ":1: bad JSON ("});
+  expect("[1, 2]", {json, "no numeric camera_angle_x"});
+  expect("{\"camera_angle_x\": true, \"frames\": [" + frame + "]}", {json, "no numeric camera_angle_x"});
+  expect("{\"camera_angle_x\": 4, \"frames\": [" + frame + "]}", {json, "camera_angle_x 4.000000 is not in (0, pi)"});
+  expect("{\"camera_angle_x\": 0.69}", {json, "no frames"});
+  expect("{\"camera_angle_x\": 0.69, \"frames\": []}", {json, "no frames"});
+  expect("{\"camera_angle_x\": 0.69, \"frames\": [{\"transform_matrix\": []}]}", {json + ": frame 0 has no file_path"});
+  expect("{\"camera_angle_x\": 0.69, \"frames\": [{\"file_path\": \"./train/r_0\", \"transform_matrix\": [[1,0,0,0]]}]}",
+         {json + ": frame 0: transform_matrix must be 4x4"});
+  expect("{\"camera_angle_x\": 0.69, \"frames\": [{\"file_path\": \"./train/r_0\", "
+         "\"transform_matrix\": [[1,0,0,0],[0,1,0,0],[0,0,1,\"4\"],[0,0,0,1]]}]}",
+         {json + ": frame 0: transform_matrix holds a non-number"});
+  expect("{\"camera_angle_x\": 0.69, \"frames\": [" + frame + ", " +
+             R"({"file_path": "./train/r_0", "time": 0.5, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]})" + "]}",
+         {json, "only 1 of 2 frames have a time"});
 }
 
 // A mask of another aspect ratio (another video's, or a crop: here a third of the width) is

@@ -4,8 +4,8 @@
 #include <chrono>
 #include <cmath>
 
-#include "nova/scene_io.hpp"
-#include "nova/synth.hpp"
+#include "nova/io/scene_io.hpp"
+#include "nova/io/synth.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -8,10 +8,10 @@
 #include <set>
 
 #include "data/synth_geometry.hpp"
-#include "nova/image_io.hpp"
-#include "nova/npy.hpp"
-#include "nova/scene_io.hpp"
-#include "nova/synth.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/npy.hpp"
+#include "nova/io/scene_io.hpp"
+#include "nova/io/synth.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -7,8 +7,8 @@
 #include <sys/wait.h>
 
 #include "../bench/tradeoff.hpp"
-#include "nova/image_io.hpp"
-#include "nova/visualize.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/visualize.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {

@@ -7,12 +7,12 @@
 #include <cstring>
 
 #include "harness.hpp"
-#include "nova/image_metrics.hpp"
+#include "nova/io/image_metrics.hpp"
+#include "nova/io/scene_io.hpp"
+#include "nova/io/visualize.hpp"
 #include "nova/run_folder.hpp"
-#include "nova/scene_io.hpp"
 #include "nova/trainer.hpp"
 #include "nova/view_renderer.hpp"
-#include "nova/visualize.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {

@@ -6,8 +6,8 @@
 #include <limits>
 #include <opencv2/videoio.hpp>
 
-#include "nova/image_metrics.hpp"
-#include "nova/visualize.hpp"
+#include "nova/io/image_metrics.hpp"
+#include "nova/io/visualize.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

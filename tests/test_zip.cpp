@@ -4,8 +4,8 @@
 #include <boost/test/unit_test.hpp>
 #include <filesystem>
 
-#include "data/zip.hpp"
-#include "nova/scene_io.hpp"
+#include "io/zip.hpp"
+#include "nova/io/scene_io.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;
@@ -76,20 +76,20 @@ BOOST_AUTO_TEST_SUITE(zip)
 BOOST_AUTO_TEST_CASE(inflate_fixed_block) {
   std::string want;
   for (int i = 0; i < 20; ++i) want += "nova nova nova nova! ";
-  BOOST_TEST(data::inflate(unhex(kFixed), want.size(), "fixed") == want);
+  BOOST_TEST(io::inflate(unhex(kFixed), want.size(), "fixed") == want);
 }
 
 BOOST_AUTO_TEST_CASE(inflate_dynamic_block) {
   const std::string want = lcg_text();
-  BOOST_TEST(data::inflate(unhex(kDynamic), want.size(), "dynamic") == want);
+  BOOST_TEST(io::inflate(unhex(kDynamic), want.size(), "dynamic") == want);
 }
 
 BOOST_AUTO_TEST_CASE(inflate_errors) {
   const std::string z = unhex(kFixed);
-  expect_error([&] { data::inflate(z.substr(0, 8), 420, "cut.npz"); }, {"cut.npz", "truncated"});
-  expect_error([&] { data::inflate(z, 421, "size.npz"); }, {"size.npz", "expected 421"});
-  expect_error([&] { data::inflate(z, 419, "long.npz"); }, {"long.npz", "more than the 419 bytes"});
-  expect_error([&] { data::inflate(std::string(1, '\x07'), 1, "type.npz"); }, {"block type"});
+  expect_error([&] { io::inflate(z.substr(0, 8), 420, "cut.npz"); }, {"cut.npz", "truncated"});
+  expect_error([&] { io::inflate(z, 421, "size.npz"); }, {"size.npz", "expected 421"});
+  expect_error([&] { io::inflate(z, 419, "long.npz"); }, {"long.npz", "more than the 419 bytes"});
+  expect_error([&] { io::inflate(std::string(1, '\x07'), 1, "type.npz"); }, {"block type"});
 }
 
 // A real .npz scene from a data folder beside the repository, when there is one (reported as

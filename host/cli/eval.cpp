@@ -2,36 +2,29 @@
 // reports PSNR (OpenCV's number on 8-bit images) and SSIM per view, their means, and for
 // synthetic scenes the composition targets; writes RUN/eval.json and the renders as PNGs.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "cli/mpi_job.hpp"
 #include "cli/options.hpp"
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
-#include "nova/evaluation.hpp"
-#include "nova/image_io.hpp"
-#include "nova/image_metrics.hpp"
+#include "nova/io/evaluation.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/image_metrics.hpp"
+#include "nova/io/visualize.hpp"
 #include "nova/runtime.hpp"
-#include "nova/visualize.hpp"
 
 namespace nova::cli {
 namespace {
 
 using Score = ViewScore;
-
-std::string json_string(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    o += c;
-  }
-  return o + "\"";
-}
 
 void print_table(const std::string& title, const std::vector<Score>& scores) {
   std::cout << title << "\n  " << std::left << std::setw(28) << "view" << std::right << std::setw(9) << "PSNR"
@@ -41,12 +34,20 @@ void print_table(const std::string& title, const std::vector<Score>& scores) {
               << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim << "\n";
 }
 
-void json_scores(std::ostream& o, const std::string& key, const std::vector<Score>& s) {
-  o << "  " << json_string(key) << ": [";
-  for (size_t i = 0; i < s.size(); ++i)
-    o << (i ? ",\n    " : "\n    ") << "{\"name\": " << json_string(s[i].name) << ", \"psnr\": " << std::setprecision(6)
-      << s[i].psnr << ", \"ssim\": " << s[i].ssim << "}";
-  o << "\n  ]";
+// A score as eval.json keeps it: 6 significant digits, which the JSON writer prints as the
+// shortest text that reads back the same. Non-finite values are written as null.
+double score_value(double v) {
+  if (!std::isfinite(v)) return v;
+  std::ostringstream s;
+  s << std::setprecision(6) << v;
+  return std::stod(s.str());
+}
+
+nlohmann::ordered_json json_scores(const std::vector<Score>& scores) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const Score& s : scores)
+    list.push_back({{"name", s.name}, {"psnr", score_value(s.psnr)}, {"ssim", score_value(s.ssim)}});
+  return list;
 }
 
 }  // namespace
@@ -142,20 +143,23 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   if (!scores.empty()) print_table("views", scores);
   if (!compose.empty()) print_table("composition targets", compose);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::ostringstream json;
-  json << "{\n  \"run\": " << json_string(run_dir) << ",\n  \"scene\": " << json_string(scene.source)
-       << ",\n  \"step\": " << run.files.checkpoint.get("step")
-       << ",\n  \"hard_blend_views\": " << (blend.scene_views ? "true" : "false")
-       << ",\n  \"hard_blend_compose\": " << (blend.composition ? "true" : "false") << ",\n";
-  json_scores(json, "views", scores);
-  json << ",\n  \"mean_psnr\": " << std::setprecision(6) << mp << ",\n  \"mean_ssim\": " << ms << ",\n";
-  json_scores(json, "compose", compose);
-  json << ",\n  \"compose_mean_psnr\": " << cp << ",\n  \"compose_mean_ssim\": " << cs
-       << ",\n  \"seconds\": " << secs << "\n}\n";
+  nlohmann::ordered_json json;
+  json["run"] = run_dir;
+  json["scene"] = scene.source;
+  json["step"] = std::stol(run.files.checkpoint.get("step"));
+  json["hard_blend_views"] = blend.scene_views;
+  json["hard_blend_compose"] = blend.composition;
+  json["views"] = json_scores(scores);
+  json["mean_psnr"] = score_value(mp);
+  json["mean_ssim"] = score_value(ms);
+  json["compose"] = json_scores(compose);
+  json["compose_mean_psnr"] = score_value(cp);
+  json["compose_mean_ssim"] = score_value(cs);
+  json["seconds"] = score_value(secs);
   const std::string path = run_dir + "/eval.json";
   {
     std::ofstream o(path + ".tmp");
-    o << json.str();
+    o << json.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
     if (!o.flush()) throw Error("cannot write '" + path + "'");
   }
   std::filesystem::rename(path + ".tmp", path);

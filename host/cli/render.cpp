@@ -1,7 +1,7 @@
 // `nova render --run RUN --out DIR`: renders a trained run. Without --compose: one camera
 // (a training camera, or --pose) at one time or at every frame's time, writing colour,
 // depth and per-NeRF masks as PNG frames (and an MP4 with --video). With --compose SPEC:
-// every target of a composition spec (compose_spec.hpp), hard-blended (add_blend_options).
+// every target of a composition spec (io/compose_spec_text.hpp), hard-blended (add_blend_options).
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -12,10 +12,10 @@
 #include "cli/options.hpp"
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
-#include "nova/compose_spec.hpp"
-#include "nova/image_io.hpp"
+#include "nova/io/compose_spec_text.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/visualize.hpp"
 #include "nova/runtime.hpp"
-#include "nova/visualize.hpp"
 
 namespace nova::cli {
 namespace {

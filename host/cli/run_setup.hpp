@@ -2,7 +2,7 @@
 // Loading the scene a run trains or is evaluated on, the same way for train, render and eval.
 #include <string>
 
-#include "nova/evaluation.hpp"
+#include "nova/io/evaluation.hpp"
 #include "nova/run_folder.hpp"
 #include "nova/scene.hpp"
 #include "nova/train_config.hpp"
@@ -11,7 +11,7 @@
 namespace nova::cli {
 
 // load_training_scene (the run's factor and hold-out split) is nova::load_training_scene in
-// nova/evaluation.hpp, shared with nova-bench.
+// nova/io/evaluation.hpp, shared with nova-bench.
 
 // A trained run and its scene (the run's own unless `scene_dir` is given).
 struct OpenRun {

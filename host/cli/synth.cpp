@@ -3,7 +3,7 @@
 #include <iostream>
 
 #include "cli/options.hpp"
-#include "nova/synth.hpp"
+#include "nova/io/synth.hpp"
 
 namespace nova::cli {
 

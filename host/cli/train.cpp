@@ -10,10 +10,10 @@
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
 #include "nova/gemm.hpp"
+#include "nova/io/scene_io.hpp"
 #include "nova/progress_line.hpp"
 #include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
-#include "nova/scene_io.hpp"
 #include "nova/trainer.hpp"
 #include "runtime/read_file.hpp"
 

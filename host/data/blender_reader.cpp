@@ -1,29 +1,48 @@
 // Blender / D-NeRF transforms_<split>.json reader: camera_angle_x, frames with file_path and a
 // 4x4 camera-to-world transform_matrix (already OpenGL axes), and `time` in [0, 1] for D-NeRF.
-#include <boost/property_tree/json_parser.hpp>
-#include <boost/property_tree/ptree.hpp>
+#include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "data/fs_util.hpp"
 #include "nova/error.hpp"
-#include "nova/image_io.hpp"
-#include "nova/scene_io.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/scene_io.hpp"
+#include "runtime/read_file.hpp"
 
 namespace nova {
 
 namespace fs = data::fs;
-namespace pt = boost::property_tree;
+using json = nlohmann::json;
+
+namespace {
+
+// The file's JSON; Error "FILE:LINE: bad JSON (WHAT)" naming the line of the first error.
+json read_json(const fs::path& file) {
+  const std::optional<std::string> text = read_file(file.string());
+  if (!text) throw Error(file.string() + ":0: bad JSON (cannot open file)");
+  try {
+    return json::parse(*text);
+  } catch (const json::parse_error& e) {
+    // e.byte: where the error was found, counted from 1.
+    const size_t at = std::min<size_t>(e.byte > 0 ? e.byte - 1 : 0, text->size());
+    const long line = 1 + std::count(text->begin(), text->begin() + static_cast<long>(at), '\n');
+    // what(): "[json.exception.parse_error.101] parse error at line L, column C: WHAT".
+    std::string what = e.what();
+    const size_t column = what.find(", column ");
+    const size_t colon = column == std::string::npos ? std::string::npos : what.find(": ", column);
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    throw Error(file.string() + ":" + std::to_string(line) + ": bad JSON (" + what + ")");
+  }
+}
+
+}  // namespace
 
 Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
   const fs::path dir(dir_s);
-  const fs::path json = dir / ("transforms_" + opt.split + ".json");
-  if (!fs::exists(json)) throw Error(json.string() + ": missing");
-  pt::ptree root;
-  try {
-    pt::read_json(json.string(), root);
-  } catch (const pt::json_parser_error& e) {
-    throw Error(json.string() + ":" + std::to_string(e.line()) + ": bad JSON (" + e.message() + ")");
-  }
+  const fs::path json_path = dir / ("transforms_" + opt.split + ".json");
+  if (!fs::exists(json_path)) throw Error(json_path.string() + ": missing");
+  const json root = read_json(json_path);
   Scene scene;
   scene.name = fs::absolute(dir).lexically_normal().filename().string();
   scene.source = dir.string();
@@ -32,24 +51,21 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
   scene.far = 6;
   const int factor = opt.factor <= 0 ? 1 : opt.factor;
 
-  double angle = 0;
-  try {
-    angle = root.get<double>("camera_angle_x");
-  } catch (const pt::ptree_error&) {
-    throw Error(json.string() + ": no numeric camera_angle_x");
-  }
+  const auto angle_at = root.is_object() ? root.find("camera_angle_x") : root.end();
+  if (angle_at == root.end() || !angle_at->is_number()) throw Error(json_path.string() + ": no numeric camera_angle_x");
+  const double angle = angle_at->get<double>();
   if (!std::isfinite(angle) || angle <= 0 || angle >= 3.14)
-    throw Error(json.string() + ": camera_angle_x " + std::to_string(angle) + " is not in (0, pi)");
-  const auto frames = root.get_child_optional("frames");
-  if (!frames || frames->empty()) throw Error(json.string() + ": no frames");
+    throw Error(json_path.string() + ": camera_angle_x " + std::to_string(angle) + " is not in (0, pi)");
+  const auto frames = root.find("frames");
+  if (frames == root.end() || !frames->is_array() || frames->empty()) throw Error(json_path.string() + ": no frames");
 
   size_t with_time = 0, index = 0;
   int w = 0, h = 0;
-  for (const auto& [key, fr] : *frames) {
-    (void)key;
-    const std::string where = json.string() + ": frame " + std::to_string(index);
+  for (const json& fr : *frames) {
+    const std::string where = json_path.string() + ": frame " + std::to_string(index);
     Frame f;
-    std::string file = fr.get<std::string>("file_path", "");
+    const auto file_at = fr.is_object() ? fr.find("file_path") : fr.end();
+    const std::string file = file_at != fr.end() && file_at->is_string() ? file_at->get<std::string>() : "";
     if (file.empty()) throw Error(where + " has no file_path");
     fs::path img = dir / file;
     if (img.extension().empty()) img += ".png";
@@ -62,30 +78,25 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
     } else if (f.rgb.width != w || f.rgb.height != h) {
       throw Error(img.string() + ": size differs from the first frame's");
     }
-    const auto m = fr.get_child_optional("transform_matrix");
-    if (!m || m->size() != 4) throw Error(where + ": transform_matrix must be 4x4");
+    const auto m = fr.find("transform_matrix");
+    if (m == fr.end() || !m->is_array() || m->size() != 4) throw Error(where + ": transform_matrix must be 4x4");
     int r = 0;
-    for (const auto& [rk, row] : *m) {
-      (void)rk;
-      if (row.size() != 4) throw Error(where + ": transform_matrix must be 4x4");
+    for (const json& row : *m) {
+      if (!row.is_array() || row.size() != 4) throw Error(where + ": transform_matrix must be 4x4");
       int c = 0;
-      for (const auto& [ck, v] : row) {
-        (void)ck;
-        double x = 0;
-        try {
-          x = v.get_value<double>();
-        } catch (const pt::ptree_error&) {
-          throw Error(where + ": transform_matrix holds a non-number");
-        }
+      for (const json& v : row) {
+        if (!v.is_number()) throw Error(where + ": transform_matrix holds a non-number");
+        const double x = v.get<double>();
         if (!std::isfinite(x)) throw Error(where + ": transform_matrix holds NaN or Inf");
         if (r < 3) f.camera.c2w[r * 4 + c] = x;
         ++c;
       }
       ++r;
     }
-    if (const auto t = fr.get_optional<double>("time")) {
-      if (!std::isfinite(*t)) throw Error(where + ": time is not finite");
-      f.time = 2.0 * *t - 1.0;
+    if (const auto t = fr.find("time"); t != fr.end() && t->is_number()) {
+      const double time = t->get<double>();
+      if (!std::isfinite(time)) throw Error(where + ": time is not finite");
+      f.time = 2.0 * time - 1.0;
       ++with_time;
     }
     f.near = scene.near;
@@ -94,7 +105,7 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
     ++index;
   }
   if (with_time != 0 && with_time != scene.frames.size())
-    throw Error(json.string() + ": only " + std::to_string(with_time) + " of " +
+    throw Error(json_path.string() + ": only " + std::to_string(with_time) + " of " +
                 std::to_string(scene.frames.size()) + " frames have a time");
   scene.has_time = with_time > 0;
   if (!scene.has_time)
@@ -109,7 +120,7 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
     f.camera.cy = 0.5 * h;
     f.masks.push_back(Image8(w, h, 1, 255));
   }
-  scene.notes.push_back(json.filename().string() + ": " + std::to_string(scene.frames.size()) +
+  scene.notes.push_back(json_path.filename().string() + ": " + std::to_string(scene.frames.size()) +
                         " frames at " + std::to_string(w) + "x" + std::to_string(h) +
                         (factor > 1 ? " (downscaled by " + std::to_string(factor) + ")" : ""));
   scene.notes.push_back(scene.has_time ? "time per frame: yes (D-NeRF), mapped to 2 t - 1"

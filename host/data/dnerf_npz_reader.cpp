@@ -5,10 +5,10 @@
 #include <cmath>
 
 #include "data/fs_util.hpp"
-#include "data/zip.hpp"
+#include "io/zip.hpp"
 #include "nova/error.hpp"
-#include "nova/npy.hpp"
-#include "nova/scene_io.hpp"
+#include "nova/io/npy.hpp"
+#include "nova/io/scene_io.hpp"
 
 namespace nova {
 
@@ -23,7 +23,7 @@ Scene load_dnerf_npz_scene(const std::string& dir_s, const LoadOptions& opt) {
       throw Error(dir_s + ": expected exactly one .npz file, found " + std::to_string(found.size()));
     file = found[0];
   }
-  const auto members = data::read_zip(file.string());
+  const auto members = io::read_zip(file.string());
   auto get = [&](const std::string& name) {
     const auto it = members.find(name + ".npy");
     if (it == members.end()) throw Error(file.string() + ": no '" + name + "' array");

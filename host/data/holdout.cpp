@@ -1,5 +1,5 @@
 // The hold-out split: plain data work on a Scene, beside the readers that fill one.
-#include "nova/scene_io.hpp"
+#include "nova/io/scene_io.hpp"
 
 #include <cstdio>
 #include <utility>

@@ -1,15 +1,16 @@
 // Readers for poses_bounds.npy layouts: NOVA / DynamicNeRF (with masks, disparity, ground
 // truth) and plain LLFF (static). Pose processing follows the reference loader; see
-// include/nova/llff_poses.hpp.
+// include/nova/io/llff_poses.hpp.
 #include <cmath>
 #include <sstream>
 
 #include "data/fs_util.hpp"
 #include "nova/error.hpp"
-#include "nova/image_io.hpp"
-#include "nova/llff_poses.hpp"
-#include "nova/npy.hpp"
-#include "nova/scene_io.hpp"
+#include "nova/io/compose_spec_text.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/llff_poses.hpp"
+#include "nova/io/npy.hpp"
+#include "nova/io/scene_io.hpp"
 
 namespace nova {
 namespace {

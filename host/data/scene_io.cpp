@@ -1,5 +1,5 @@
 // Format detection, the load_scene entry point, and the printed scene summary.
-#include "nova/scene_io.hpp"
+#include "nova/io/scene_io.hpp"
 
 #include <cmath>
 #include <iomanip>

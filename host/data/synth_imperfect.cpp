@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "nova/synth.hpp"
+#include "nova/io/synth.hpp"
 
 namespace nova {
 namespace {

@@ -5,11 +5,11 @@
 #include <sstream>
 
 #include "data/fs_util.hpp"
-#include "nova/compose_spec.hpp"
 #include "nova/error.hpp"
-#include "nova/image_io.hpp"
-#include "nova/npy.hpp"
-#include "nova/synth.hpp"
+#include "nova/io/compose_spec_text.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/npy.hpp"
+#include "nova/io/synth.hpp"
 
 namespace nova {
 namespace {

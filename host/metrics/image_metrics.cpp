@@ -1,6 +1,6 @@
 // PSNR and SSIM without OpenCV. PSNR follows OpenCV's formula step by step (same operations
 // in the same order) so the two agree to the last bit; SSIM filters separably in double.
-#include "nova/image_metrics.hpp"
+#include "nova/io/image_metrics.hpp"
 
 #include <cfloat>
 #include <cmath>

@@ -1,11 +1,11 @@
-#include "nova/evaluation.hpp"
+#include "nova/io/evaluation.hpp"
 
 #include <cstdio>
 #include <iostream>
 
-#include "nova/image_metrics.hpp"
-#include "nova/scene_io.hpp"
-#include "nova/visualize.hpp"
+#include "nova/io/image_metrics.hpp"
+#include "nova/io/scene_io.hpp"
+#include "nova/io/visualize.hpp"
 
 namespace nova {
 

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 
@@ -19,11 +20,35 @@ namespace {
 
 constexpr const char* kFormat = "nova-run-checkpoint 1";
 
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
+// A metrics value as the record keeps it: 7 significant digits (float32's), which the JSON
+// writer prints as the shortest text that reads back the same. Non-finite values are written
+// as null (nlohmann's default), so every line stays valid JSON.
+double metric_value(double v) {
+  if (!std::isfinite(v)) return v;
   std::ostringstream s;
   s << std::setprecision(7) << v;
-  return s.str();
+  return std::stod(s.str());
+}
+
+// One metrics.jsonl record; the keys in this order (ordered_json keeps insertion order).
+std::string metrics_record(const TrainProgress& p) {
+  nlohmann::ordered_json r;
+  r["step"] = p.step;
+  r["phase"] = p.phase;
+  r["loss"] = metric_value(p.loss);
+  for (const auto& [name, v] : p.terms) r[name] = metric_value(v);
+  r["psnr"] = metric_value(p.psnr);
+  r["lr"] = metric_value(p.lr);
+  r["augmented"] = p.augmented;
+  r["rays_per_s"] = metric_value(p.rays_per_s);
+  if (p.kept >= 0) {
+    r["samples_kept"] = metric_value(p.kept);
+    nlohmann::ordered_json occupied = nlohmann::ordered_json::array();
+    for (double f : p.occupied) occupied.push_back(metric_value(f));
+    r["occupied"] = std::move(occupied);
+  }
+  r["seconds"] = metric_value(p.seconds);
+  return r.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 // Keeps the metrics records of steps <= `step` (a resumed run continues the same file).
@@ -32,8 +57,10 @@ void truncate_metrics(const std::string& path, long step) {
   if (!in) return;
   std::string line, kept;
   while (std::getline(in, line)) {
-    const size_t at = line.find("\"step\":");
-    if (at != std::string::npos && std::stol(line.substr(at + 7)) <= step) kept += line + "\n";
+    // A line that is not a record (cut short by a crash) goes too.
+    const nlohmann::json record = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
+    const auto at = record.is_object() ? record.find("step") : record.end();
+    if (at != record.end() && at->is_number_integer() && at->get<long>() <= step) kept += line + "\n";
   }
   in.close();
   std::ofstream(path, std::ios::trunc) << kept;
@@ -312,22 +339,11 @@ void Trainer::run(const std::function<void(const TrainProgress&)>& progress, lon
       p.rays_per_s = config_.rays / per_step;
       p.seconds = std::chrono::duration<double>(now - start).count();
       p.eta_seconds = std::min(pretrain_left, end - step_) * pretrain_step_s + joint_left * joint_estimate;
-      metrics << "{\"step\":" << p.step << ",\"phase\":\"" << p.phase << "\",\"loss\":" << json_number(p.loss);
-      for (auto& [name, v] : p.terms) metrics << ",\"" << name << "\":" << json_number(v);
-      metrics << ",\"psnr\":" << json_number(p.psnr) << ",\"lr\":" << json_number(p.lr)
-              << ",\"augmented\":" << (p.augmented ? "true" : "false")
-              << ",\"rays_per_s\":" << json_number(p.rays_per_s);
-      if (p.kept >= 0) {
-        metrics << ",\"samples_kept\":" << json_number(p.kept) << ",\"occupied\":[";
-        for (size_t k = 0; k < p.occupied.size(); ++k) metrics << (k ? "," : "") << json_number(p.occupied[k]);
-        metrics << "]";
-      }
-      metrics << ",\"seconds\":" << json_number(p.seconds)
-              << "}\n";
+      metrics << metrics_record(p) << "\n";
       metrics.flush();
       if (!std::isfinite(p.loss))
-        throw Error("training diverged at step " + std::to_string(p.step) + ": loss is " + json_number(p.loss) +
-                        " (try a lower --lr); the last checkpoint is kept",
+        throw Error("training diverged at step " + std::to_string(p.step) +
+                        ": loss is null (try a lower --lr); the last checkpoint is kept",
                     kExitInternal);
       if (progress) progress(p);
       window_start = now;

@@ -1,22 +1,16 @@
 #pragma once
-// Composition specs: which object instances to place where and when, read by
-// `nova render --compose SPEC` and written by `nova synth` next to its ground truth.
+// Composition specs: which object instances to place where and when, rendered by
+// ViewRenderer (view_renderer.hpp). The text format that `nova render --compose SPEC` reads
+// and `nova synth` writes next to its ground truth is nova_io's (io/compose_spec_text.hpp).
 //
-// Text format, one statement per line, '#' starts a comment, blank lines ignored:
-//
-//   nova-compose 1
-//   target NAME camera=FRAME [background=1|0]
-//   instance object=K time=T [rotate=RX,RY,RZ] [translate=TX,TY,TZ] [pivot=PX,PY,PZ]
-//
-// - `target` starts a target; the `instance` lines after it belong to it. NAME is a plain
-//   word (letters, digits, '_', '-', '.'); the ground-truth image is NAME.png.
-// - camera=FRAME: render with the (processed) camera of training frame FRAME.
-// - background=1 (default) draws the static NeRF; 0 draws the instances alone.
-// - object=K: object NeRF K (1..K). time=T: the object's time (frame i shows 2 i / N - 1).
+// - A target is one picture: NAME (a plain word; the ground-truth image is NAME.png), the
+//   camera of training frame `camera` (processed), and whether the static NeRF is drawn
+//   (`background`; without it the instances alone).
+// - An instance is object NeRF `object` (1..K) at its time `time` (frame i shows 2 i / N - 1).
 //   The same object may appear in several instances.
 // - The instance maps a point p of object K at time T (scene coordinates, as trained) to
 //   p' = R (p - pivot) + pivot + translate, with R = Rz(RZ) Ry(RY) Rx(RX), angles in degrees
-//   (x applied first). Defaults: no rotation, no translation. Without pivot= the instance
+//   (x applied first). Defaults: no rotation, no translation. Without a pivot the instance
 //   turns about its object's own centre at time T: the renderer finds it from the object
 //   NeRF's density (ViewRenderer::pivot_for, object_centre.hpp) and falls back to the scene
 //   origin, with a warning, where the object has no density at T. A renderer samples object
@@ -48,13 +42,6 @@ struct ComposeSpec {
   std::vector<ComposeTarget> targets;
   bool empty() const { return targets.empty(); }
 };
-
-// Parses spec text; `origin` names the file in error messages. Throws nova::Error.
-ComposeSpec parse_compose_spec(const std::string& text, const std::string& origin);
-ComposeSpec read_compose_spec(const std::string& path);
-// Writes with round-trip precision (parse(format(s)) == s); an instance without a pivot is
-// written without pivot=.
-std::string format_compose_spec(const ComposeSpec& spec);
 
 // R = Rz Ry Rx (degrees), row-major 3x3.
 std::array<double, 9> euler_xyz_deg_to_matrix(const std::array<double, 3>& deg);

@@ -1,7 +1,7 @@
 // 8-bit image I/O over OpenCV. Files are read into memory first so that "missing",
 // "unreadable", "not a PNG" and "truncated" get distinct messages; cv::imdecode alone reports
 // all of them as an empty image (and libpng may decode a truncated file partially).
-#include "nova/image_io.hpp"
+#include "nova/io/image_io.hpp"
 
 #include <cstring>
 #include <fstream>

@@ -4,7 +4,7 @@
 #include <map>
 #include <string>
 
-namespace nova::data {
+namespace nova::io {
 
 // Raw DEFLATE stream -> bytes; `expected_size` is the uncompressed size from the directory.
 // Throws nova::Error naming `origin` on a malformed stream.
@@ -13,4 +13,4 @@ std::string inflate(const std::string& compressed, size_t expected_size, const s
 // Every member of the archive at `path`, by name, uncompressed.
 std::map<std::string, std::string> read_zip(const std::string& path);
 
-}  // namespace nova::data
+}  // namespace nova::io

@@ -1,15 +1,15 @@
 // The .npy format (NumPy NEP 1): magic "\x93NUMPY", version, header length, a Python dict
 // literal {'descr': ..., 'fortran_order': ..., 'shape': (...)}, padding, then raw data.
-#include "nova/npy.hpp"
+#include "nova/io/npy.hpp"
 
 #include <bit>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 
-#include "data/fs_util.hpp"
 #include "nova/error.hpp"
 #include "runtime/parse_number.hpp"
+#include "runtime/read_file.hpp"
 
 namespace nova {
 namespace {
@@ -119,7 +119,9 @@ NpyArray parse_npy(const std::string& bytes, const std::string& origin) {
 }
 
 NpyArray read_npy(const std::string& path) {
-  return parse_npy(data::read_text(path), path);
+  const std::optional<std::string> bytes = read_file(path);
+  if (!bytes) throw Error(path + ": cannot open");
+  return parse_npy(*bytes, path);
 }
 
 namespace {

@@ -1,6 +1,6 @@
 // Quantisation, depth colouring and MP4 output. Only the colormap and the video writer need
 // OpenCV; the rest is plain loops so the numbers match the metrics' quantisation exactly.
-#include "nova/visualize.hpp"
+#include "nova/io/visualize.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 #include <string>
 
 #include "nova/error.hpp"
-#include "nova/image_metrics.hpp"
+#include "nova/io/image_metrics.hpp"
 
 namespace nova {
 namespace fs = std::filesystem;

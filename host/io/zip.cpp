@@ -1,5 +1,5 @@
 // ZIP reading for .npz files (see zip.hpp); deflated members are inflated by zlib.
-#include "data/zip.hpp"
+#include "io/zip.hpp"
 
 #include <zlib.h>
 
@@ -7,10 +7,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "data/fs_util.hpp"
 #include "nova/error.hpp"
+#include "runtime/read_file.hpp"
 
-namespace nova::data {
+namespace nova::io {
 namespace {
 
 uint32_t le32(const std::string& s, size_t at) {
@@ -58,7 +58,9 @@ std::string inflate(const std::string& in, size_t expected_size, const std::stri
 }
 
 std::map<std::string, std::string> read_zip(const std::string& path) {
-  const std::string z = data::read_text(path);
+  const std::optional<std::string> file = read_file(path);
+  if (!file) throw Error(path + ": cannot open");
+  const std::string& z = *file;
   // End of central directory: the last "PK\5\6" within the final 64 KiB + 22 bytes.
   size_t eocd = std::string::npos;
   for (size_t i = z.size() >= 22 ? z.size() - 22 : 0; i + 22 <= z.size(); --i) {
@@ -106,4 +108,4 @@ std::map<std::string, std::string> read_zip(const std::string& path) {
   return out;
 }
 
-}  // namespace nova::data
+}  // namespace nova::io

@@ -36,7 +36,7 @@
 //   disp/NNN.npy (float32 inverse z-depth), synth.txt (preset, seed, sizes; for the family
 //   also the drawn scene in words), and gt/views.txt + gt/poses_bounds.npy + gt/cam0/NNN.png
 //   (camera 0 at every time) + gt/heldout{1,2}/NNN.png (held-out cameras at every time), and
-//   gt/compose/spec.txt (a compose spec, see compose_spec.hpp, in the processed scene frame)
+//   gt/compose/spec.txt (a compose spec, see compose_spec_text.hpp, in the processed scene frame)
 //   + one PNG per target, rendered from that very spec after parsing it back.
 // The same preset and seed give byte-identical files.
 #include <array>
@@ -44,7 +44,7 @@
 #include <string>
 #include <vector>
 
-#include "nova/llff_poses.hpp"
+#include "nova/io/llff_poses.hpp"
 #include "nova/scene.hpp"
 
 namespace nova {
