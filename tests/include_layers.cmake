@@ -1,10 +1,12 @@
 # The include graph follows the module layering (docs/architecture.md, "Layers"):
 #
-#   runtime < graph < ops < nerf < train < data < metrics < render < cli
+#   runtime < tuning < graph < ops < nerf < train < data < metrics < render < cli
 #
 # A file may include headers of its own module and of the modules before it. runtime to train
 # is the core (nova_core); data, metrics and render are the I/O modules (nova_io, OpenCV),
-# after the core so that it can include none of them.
+# after the core so that it can include none of them. tuning (the kernel parameter database)
+# comes right after runtime: the ops ask it for their defines, and it needs nothing but the
+# runtime (the GEMM search runs candidates through functions the GEMM op hands in).
 #
 # A header nova/X.hpp belongs to the module whose host/ folder holds X.cpp, or, where no
 # module has one (its code is split over several files, or it is plain data), to the module
@@ -14,7 +16,7 @@
 #
 # cmake -DSOURCE_DIR=<repository> [-DIO_HEADERS=<NOVA_IO_HEADERS, comma-separated>] -P include_layers.cmake
 cmake_minimum_required(VERSION 3.20)
-set(core runtime graph ops nerf train)
+set(core runtime tuning graph ops nerf train)
 set(io data metrics render)
 set(layers ${core} ${io} cli)
 
