@@ -18,6 +18,7 @@
 #include "dense_fusion.hpp"
 #include "nova/executor.hpp"
 #include "nova/gemm.hpp"
+#include "nova/tuning.hpp"
 #include "nova/mlp.hpp"
 #include "nova/ops.hpp"
 #include "options.hpp"
@@ -156,7 +157,7 @@ int mlp(const Args& args) {
     std::cerr << "nova-bench: warning: " << e.what() << "\n";
   }
   std::cout << "device " << rt.info().name << " (" << rt.info().type_name() << "), GEMM tuning "
-            << gemm_tuning_for(rt.info()).name << " + " << tuned_shapes
+            << device_tuning(rt.info()).name << " + " << tuned_shapes
             << " tuned shape classes from " << gemm_tuning_cache_path()
             << "; host BLAS: " << host_blas_name() << "\n"
             << "network 63 -> " << c.depth << " x " << c.width << " (skip after layer " << c.skip

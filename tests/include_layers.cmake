@@ -1,11 +1,13 @@
 # The include graph follows the module layering (docs/architecture.md, "Layers"):
 #
-#   runtime < graph < ops < nerf < train < metrics < io < data < render < cli
+#   runtime < tuning < graph < ops < nerf < train < metrics < io < data < render < cli
 #
 # A file may include headers of its own module and of the modules before it. runtime to train
 # is the core (nova_core); metrics, io, data and render are the I/O modules (nova_io, OpenCV),
 # after the core so that it can include none of them. metrics (plain C++ scores) comes before
-# io because pictures are quantised as the metrics assume (visualize.cpp).
+# io because pictures are quantised as the metrics assume (visualize.cpp). tuning (the kernel
+# parameter database) comes right after runtime: the ops ask it for their defines, and it needs
+# nothing but the runtime (the GEMM search runs candidates through functions the GEMM op hands in).
 #
 # A header nova/X.hpp or nova/io/X.hpp belongs to the module whose host/ folder holds X.cpp,
 # or, where no module has one (its code is split over several files, or it is plain data), to
@@ -19,7 +21,7 @@
 #
 # cmake -DSOURCE_DIR=<repository> -P include_layers.cmake
 cmake_minimum_required(VERSION 3.20)
-set(core runtime graph ops nerf train)
+set(core runtime tuning graph ops nerf train)
 set(io_modules metrics io data render)
 set(layers ${core} ${io_modules} cli)
 

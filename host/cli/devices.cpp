@@ -4,6 +4,7 @@
 
 #include "cli/options.hpp"
 #include "nova/gemm.hpp"
+#include "nova/tuning.hpp"
 #include "nova/runtime.hpp"
 
 namespace nova::cli {
@@ -29,7 +30,7 @@ int devices(const Args& args) {
               << d.opencl_version.substr(0, 21) << d.name << " (" << d.platform_name << ")"
               << (is_chosen ? "  <- chosen" : "") << "\n";
   }
-  std::cout << "GEMM tuning for the chosen device: " << gemm_tuning_for(chosen).name << "\n";
+  std::cout << "GEMM tuning for the chosen device: " << device_tuning(chosen).name << "\n";
   if (host_gemm_available(chosen))
     std::cout << "host BLAS for the chosen device: " << host_blas_library()
               << " (GEMMs without a tuned winner run on it; NOVA_GEMM, NOVA_HOST_BLAS change that)\n";

@@ -1,6 +1,7 @@
 // `nova tune`: searches GEMM configurations for the shapes nova's MLPs run on this device,
 // checks every candidate against a float64 host reference, and writes the winners to the
-// per-device tuning cache that configure_gemm reads at start-up.
+// per-device tuning cache that configure_gemm reads at start-up. The search and the cache are
+// the tuning module's (gemm_tuning.hpp); the GEMM op runs the candidates (gemm_runner).
 #ifdef NOVA_HOST_BLAS
 #include <cblas.h>
 #endif
@@ -14,6 +15,7 @@
 
 #include "cli/options.hpp"
 #include "nova/gemm.hpp"
+#include "nova/gemm_tuning.hpp"
 #include "nova/runtime.hpp"
 #include "runtime/parse_number.hpp"
 
@@ -140,13 +142,15 @@ int tune(const Args& args) {
   so.repeats = repeats;
   so.max_seconds = vm["budget"].as<double>();
   so.progress = [](const std::string& line) { std::cout << line << std::endl; };
+  const GemmRunner runner = gemm_runner();
   std::vector<GemmSearchResult> results;
   std::vector<double> host;
   std::vector<GemmCacheEntry> entries;
   const auto t0 = std::chrono::steady_clock::now();
   for (size_t i = 0; i < shapes.size(); ++i) {
     std::cout << "[" << i + 1 << "/" << shapes.size() << "] " << shapes[i].str() << std::endl;
-    auto r = search_gemm(rt, shapes[i], gemm_candidates(rt, shapes[i], quick), so);
+    auto r = search_gemm(rt, shapes[i], gemm_candidates(rt, shapes[i], quick, host_gemm_available(rt)),
+                         runner, so);
     host.push_back(host_blas_gflops(shapes[i]));
     if (r.winner >= 0) {
       GemmCacheEntry e = gemm_cache_key(rt.info());

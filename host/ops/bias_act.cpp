@@ -1,11 +1,12 @@
 // y = act(h + b): bias and activation fused into one pass over the GEMM output.
 #include "layer_parts.hpp"
+#include "nova/tuning.hpp"
 
 namespace nova {
 namespace {
 
 std::string activation_options(Activation act) {
-  return "-DACT=" + std::to_string(static_cast<int>(act));
+  return ActivationParams{static_cast<int>(act)}.to_defines();
 }
 
 }  // namespace

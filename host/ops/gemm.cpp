@@ -1,26 +1,19 @@
-// The GEMM providers: CLBlast (table or explicit Xgemm parameters), nova's first own kernels
-// and the register-blocked kernel (kernels/gemm.cl), and the dispatch by the tuning cache.
+// The GEMM op: nova's first own kernels and the register-blocked kernel (kernels/gemm.cl),
+// and the dispatch among the providers (these, gemm_clblast.cpp, gemm_host.cpp) by the tuning
+// cache (gemm_tuning.hpp).
 #include "nova/gemm.hpp"
-
-#include <clblast.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <mutex>
-#include <sstream>
 
+#include "gemm_clblast.hpp"
 #include "gemm_host.hpp"
+#include "nova/tuning.hpp"
 #include "op_util.hpp"
-#include "runtime/parse_number.hpp"
 
 namespace nova {
-
-// gemm_tuning.cpp: CLBlast's Xgemm parameters for an explicit configuration (the table's
-// when cfg.params is empty), applied under clblast_mutex() before a CLBlast call.
-void apply_clblast_config(Runtime& rt, const GemmConfig& cfg);
-std::mutex& clblast_mutex();
-
 namespace {
 
 std::mutex provider_mutex;
@@ -50,7 +43,7 @@ void transpose_b(Runtime& rt, const GemmArgs& g, cl_mem t) {
 // one the kernels never read the bias argument; C stands in for it.
 std::string epilogue_options(const GemmEpilogue& e) {
   if (!e.bias) return "";
-  return " -DGEMM_BIAS_ACT=" + std::to_string(static_cast<int>(e.act));
+  return ActivationParams{static_cast<int>(e.act)}.gemm_epilogue_defines();
 }
 Launch& epilogue_args(Launch& l, const GemmArgs& g, const GemmEpilogue& e) {
   return l.arg(e.bias ? e.bias : g.c).arg(detail::u32(e.stride_bias, "gemm bias stride"));
@@ -64,7 +57,7 @@ void epilogue_pass(Runtime& rt, const GemmArgs& g, const GemmEpilogue& e) {
     throw Error("GEMM epilogue: a separate pass needs C dense and one bias row per batch",
                 kExitInternal);
   const size_t count = g.batch * g.m * g.n;
-  rt.launch("activation", "bias_act_forward", "-DACT=" + std::to_string(static_cast<int>(e.act)))
+  rt.launch("activation", "bias_act_forward", ActivationParams{static_cast<int>(e.act)}.to_defines())
       .arg(g.c).arg(e.bias).arg(g.c).arg(u32(count, "gemm epilogue size"))
       .arg(u32(g.n, "gemm n")).arg(u32(g.m * g.n, "gemm epilogue per batch"))
       .run(count);
@@ -100,36 +93,17 @@ void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp, const GemmEpilogue& e
 }
 
 // ---- the register-blocked kernel (gemm_blk) ------------------------------------------------
-struct Blocked {
-  size_t rm = 6, vn = 2, kc = 0;  // rows and float8 vectors per work-item; split chunk
-  size_t ta = 0;  // 1: op(A) = A^T is transposed into the scratch first (rows contiguous)
-};
-
-Blocked blocked_params(const GemmConfig& c) {
-  Blocked b;
-  for (const auto& [key, v] : c.params) {
-    if (key == "RM") b.rm = v;
-    else if (key == "VN") b.vn = v;
-    else if (key == "KC") b.kc = v;
-    else if (key == "TA") b.ta = v;
-    else throw Error("GEMM configuration '" + c.str() + "': unknown parameter " + key);
-  }
-  if (b.rm < 1 || b.rm > 16 || b.vn < 1 || b.vn > 4 || b.ta > 1)
-    throw Error("GEMM configuration '" + c.str() + "': RM must be 1..16, VN 1..4, TA 0 or 1");
-  return b;
-}
-
-size_t blocked_splits(const GemmArgs& g, const Blocked& p) {
+size_t blocked_splits(const GemmArgs& g, const BlockedGemmParams& p) {
   return p.kc == 0 || g.k <= p.kc ? 1 : (g.k + p.kc - 1) / p.kc;
 }
 
 // Floats of A^T in the scratch (TA=1 with op(A) = A^T).
-size_t blocked_at_floats(const GemmArgs& g, const Blocked& p) {
+size_t blocked_at_floats(const GemmArgs& g, const BlockedGemmParams& p) {
   return p.ta && g.trans_a ? g.batch * g.m * g.k : 0;
 }
 
 // B^T first (when op(B) = B^T), then A^T (TA=1), then the partial sums of a split reduction.
-size_t blocked_temp_floats(const GemmArgs& g, const Blocked& p) {
+size_t blocked_temp_floats(const GemmArgs& g, const BlockedGemmParams& p) {
   const size_t splits = blocked_splits(g, p);
   return own_temp_floats(g) + blocked_at_floats(g, p) +
          (splits > 1 ? splits * g.batch * g.m * g.n : 0);
@@ -138,7 +112,7 @@ size_t blocked_temp_floats(const GemmArgs& g, const Blocked& p) {
 void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp,
                   const GemmEpilogue& epi) {
   using detail::u32;
-  const Blocked p = blocked_params(cfg);
+  const BlockedGemmParams p = blocked_gemm_params(cfg);
   if (g.trans_a && g.trans_b) throw Error("blocked GEMM: A^T B^T is not supported");
   const size_t splits = blocked_splits(g, p);
   Buffer scratch;
@@ -154,8 +128,7 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
     ldb = g.n;
     stride_b = g.k * g.n;
   }
-  const std::string options = "-DGEMM_RM=" + std::to_string(p.rm) +
-                              " -DGEMM_VN=" + std::to_string(p.vn) + epilogue_options(epi);
+  const std::string options = p.to_defines() + epilogue_options(epi);
   cl_mem a = g.a;
   size_t a_rs = g.trans_a ? 1 : g.lda, a_cs = g.trans_a ? g.lda : 1, stride_a = g.stride_a;
   size_t poff = own_temp_floats(g);
@@ -184,9 +157,9 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
       .arg(u32(kc, "gemm kc")).arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta);
   epilogue_args(blk, g, epi);
   const size_t bn = 8 * p.vn;
-  // A work-group of at most 16 column blocks x (64 / that) row blocks: small enough that a
-  // CPU device gets many groups to share among its threads.
-  blk.run2((g.n + bn - 1) / bn, (g.m + p.rm - 1) / p.rm * g.batch * splits, 64, 16);
+  const WorkGroupCap group = device_tuning(rt.info()).blocked_gemm_group;
+  blk.run2((g.n + bn - 1) / bn, (g.m + p.rm - 1) / p.rm * g.batch * splits, group.items,
+           group.items0);
   if (splits > 1) {
     Launch reduce = rt.launch("gemm", "gemm_reduce", options);
     reduce.arg(temp).arg(u32(poff, "gemm partials")).arg(g.c).arg(u32(g.m, "gemm m"))
@@ -195,47 +168,6 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
         .arg(u32(splits, "gemm splits")).arg(g.alpha).arg(g.beta);
     epilogue_args(reduce, g, epi).run2(g.n, g.m * g.batch);
   }
-}
-
-// ---- CLBlast --------------------------------------------------------------------------------
-clblast::Transpose tr(bool t) { return t ? clblast::Transpose::kYes : clblast::Transpose::kNo; }
-
-void check(clblast::StatusCode st, const char* what, const GemmArgs& g) {
-  if (st == clblast::StatusCode::kSuccess) return;
-  throw Error(std::string(what) + " failed with CLBlast status " +
-                  std::to_string(static_cast<int>(st)) + " (m=" + std::to_string(g.m) +
-                  " n=" + std::to_string(g.n) + " k=" + std::to_string(g.k) +
-                  " batch=" + std::to_string(g.batch) + ")",
-              kExitInternal);
-}
-
-void clblast_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
-  std::lock_guard<std::mutex> lock(clblast_mutex());
-  apply_clblast_config(rt, cfg);
-  if (g.batch == 1) {
-    check(clblast::Gemm(clblast::Layout::kRowMajor, tr(g.trans_a), tr(g.trans_b), g.m, g.n, g.k,
-                        g.alpha, g.a, 0, g.lda, g.b, 0, g.ldb, g.beta, g.c, 0, g.ldc,
-                        rt.queue_ptr(), nullptr, temp),
-          "clblast::Gemm", g);
-  } else {
-    check(clblast::GemmStridedBatched(clblast::Layout::kRowMajor, tr(g.trans_a), tr(g.trans_b),
-                                      g.m, g.n, g.k, g.alpha, g.a, 0, g.lda, g.stride_a, g.b, 0,
-                                      g.ldb, g.stride_b, g.beta, g.c, 0, g.ldc, g.stride_c,
-                                      g.batch, rt.queue_ptr(), nullptr),
-          "clblast::GemmStridedBatched", g);
-  }
-}
-
-size_t clblast_temp_bytes(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g) {
-  if (g.batch != 1) return 0;  // the batched routine allocates its own scratch
-  std::lock_guard<std::mutex> lock(clblast_mutex());
-  apply_clblast_config(rt, cfg);
-  size_t bytes = 0;
-  check(clblast::GemmTempBufferSize<float>(clblast::Layout::kRowMajor, tr(g.trans_a),
-                                           tr(g.trans_b), g.m, g.n, g.k, 0, g.lda, 0, g.ldb, 0,
-                                           g.ldc, rt.queue_ptr(), bytes),
-        "clblast::GemmTempBufferSize", g);
-  return bytes;
 }
 
 const GemmConfig& table_config() {
@@ -294,32 +226,6 @@ void set_gemm_provider(Runtime& rt, GemmProvider p) {
   providers[rt.device()] = p;
 }
 
-std::string GemmConfig::str() const {
-  std::string s = provider;
-  for (const auto& [k, v] : params) s += " " + k + "=" + std::to_string(v);
-  return s;
-}
-
-GemmConfig GemmConfig::parse(const std::string& text) {
-  std::istringstream in(text);
-  GemmConfig c;
-  if (!(in >> c.provider) ||
-      (c.provider != "clblast" && c.provider != "kernels" && c.provider != "blocked" &&
-       c.provider != "host"))
-    throw Error("'" + text + "' is no GEMM configuration (clblast|kernels|blocked|host KEY=VALUE...)");
-  for (std::string item; in >> item;) {
-    const size_t eq = item.find('=');
-    const std::optional<unsigned long long> v =
-        eq == std::string::npos || eq == 0 ? std::nullopt : parse_whole_unsigned(item.substr(eq + 1));
-    if (!v || item[eq + 1] == '-') throw Error("'" + text + "': '" + item + "' is not KEY=unsigned integer");
-    c.params[item.substr(0, eq)] = static_cast<size_t>(*v);
-  }
-  if ((c.provider == "kernels" || c.provider == "host") && !c.params.empty())
-    throw Error("'" + text + "': the " + c.provider + " provider takes no parameters");
-  if (c.provider == "blocked") blocked_params(c);  // validates
-  return c;
-}
-
 bool gemm_fuses_epilogue(const GemmConfig& cfg, const GemmArgs& g) {
   return cfg.provider == "blocked" || (cfg.provider == "kernels" && !g.trans_a);
 }
@@ -348,7 +254,7 @@ void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem tem
 size_t gemm_temp_bytes_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g) {
   configure_gemm(rt);
   if (cfg.provider == "kernels") return own_temp_floats(g) * sizeof(float);
-  if (cfg.provider == "blocked") return blocked_temp_floats(g, blocked_params(cfg)) * sizeof(float);
+  if (cfg.provider == "blocked") return blocked_temp_floats(g, blocked_gemm_params(cfg)) * sizeof(float);
   if (cfg.provider == "host") return 0;
   return clblast_temp_bytes(rt, cfg, g);
 }
@@ -376,18 +282,21 @@ size_t gemm_temp_bytes(Runtime& rt, const GemmArgs& g) {
   return gemm_temp_bytes_with(rt, choose(rt, g), g);
 }
 
-std::optional<GemmShapeClass> gemm_shape_class(const GemmArgs& g) {
-  if (g.trans_a && g.trans_b) return std::nullopt;
-  size_t long_dim = g.trans_a ? g.k : g.m;
-  if (long_dim < kGemmTunedMinRows) return std::nullopt;
-  size_t p = 1;
-  while (p * 2 <= long_dim) p *= 2;
-  const char* kind = g.trans_a ? "tn" : g.trans_b ? "nt" : "nn";
-  return GemmShapeClass{kind, g.trans_a ? g.m : p, g.n, g.trans_a ? p : g.k};
+GemmRunner gemm_runner() {
+  return {[](Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
+            gemm_with(rt, cfg, g, temp);
+          },
+          gemm_temp_bytes_with};
 }
 
-std::string GemmShapeClass::str() const {
-  return kind + " " + std::to_string(m) + "x" + std::to_string(n) + "x" + std::to_string(k);
+GemmSearchResult search_gemm(Runtime& rt, const GemmShapeClass& shape,
+                             const std::vector<GemmCandidate>& candidates,
+                             const GemmSearchOptions& options) {
+  return search_gemm(rt, shape, candidates, gemm_runner(), options);
+}
+
+std::vector<GemmCandidate> gemm_candidates(Runtime& rt, const GemmShapeClass& shape, bool quick) {
+  return gemm_candidates(rt, shape, quick, host_gemm_available(rt));
 }
 
 }  // namespace nova

@@ -1,12 +1,12 @@
 // The multiresolution hash encoding op (kernels/hashgrid.cl).
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
 #include "nova/error.hpp"
 #include "nova/executor.hpp"
 #include "nova/hash_grid.hpp"
 #include "nova/runtime.hpp"
+#include "nova/tuning.hpp"
 #include "op_util.hpp"
 
 namespace nova {
@@ -96,8 +96,7 @@ class HashEncodingOp final : public Op {
     return {{1.0f / c_.half_size(0), 1.0f / c_.half_size(1), 1.0f / c_.half_size(2), 1.0f}};
   }
   std::string build_options() const {
-    return "-DHG_DIMS=" + std::to_string(dims_) + " -DHG_FEATURES=" + std::to_string(c_.features) +
-           (c_.extend ? " -DHG_EXTEND=1" : "");
+    return HashGridParams{dims_, static_cast<size_t>(c_.features), c_.extend}.to_defines();
   }
   void upload_resolutions(Runtime& rt) {
     if (!res_buffer_.get()) res_buffer_ = rt.upload_floats(res_);
@@ -111,22 +110,6 @@ class HashEncodingOp final : public Op {
 };
 
 }  // namespace
-
-HashBackward hash_backward_choice(const DeviceInfo& d) {
-  const char* env = std::getenv("NOVA_HASH_BACKWARD");
-  const std::string want = env ? env : "";
-  if (want == "ordered") return HashBackward::Ordered;
-  if (want == "atomic") {
-    if (!d.int64_atomics)
-      throw Error("NOVA_HASH_BACKWARD=atomic: device '" + d.name + "' has no cl_khr_int64_base_atomics", kExitUsage);
-    return HashBackward::Atomic;
-  }
-  if (!want.empty() && want != "auto")
-    throw Error("NOVA_HASH_BACKWARD='" + want + "': expected auto, ordered or atomic", kExitUsage);
-  // A CPU's few cores are busy with the networks and levels of the ordered backward, which
-  // measured faster there (docs/performance.md); a GPU needs parallelism over rows.
-  return d.int64_atomics && !(d.type & CL_DEVICE_TYPE_CPU) ? HashBackward::Atomic : HashBackward::Ordered;
-}
 
 void validate(const HashGridConfig& c) {
   auto fail = [](const std::string& what) { throw Error("hash grid: " + what, kExitUsage); };

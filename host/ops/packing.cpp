@@ -5,6 +5,7 @@
 #include "nova/error.hpp"
 #include "nova/executor.hpp"
 #include "nova/occupancy.hpp"
+#include "nova/tuning.hpp"
 #include "op_util.hpp"
 
 namespace nova {
@@ -13,14 +14,12 @@ namespace {
 // Indices are stored as floats: exact up to 2^24 rows.
 constexpr size_t kMaxPackRows = size_t{1} << 24;
 
-// Rows per compaction block (kernels/packing.cl's PACK_BLOCK, passed as a build option).
-constexpr size_t kPackBlock = 128;
 
 class PackOp final : public Op {
  public:
   PackOp(std::shared_ptr<PackSelect> s, int extent, size_t batches, size_t rows, size_t multiple)
       : select_(std::move(s)), extent_(extent), batches_(batches), rows_(rows), multiple_(multiple),
-        blocks_((rows + kPackBlock - 1) / kPackBlock) {}
+        blocks_((rows + pack_.block - 1) / pack_.block) {}
   std::string type() const override { return "pack_occupied"; }
 
   void forward(ExecContext& ctx) override {
@@ -39,7 +38,7 @@ class PackOp final : public Op {
     ensure_scratch(rt);
     if (test) upload_grids(rt, s);
     const bool use_open = range.open != nullptr;
-    const std::string opts = "-DPACK_BLOCK=" + std::to_string(kPackBlock);
+    const std::string opts = pack_.to_defines();
     const unsigned nb = detail::u32(blocks_, "pack blocks");
     ctx.launch("packing", "pack_flags", opts)
         .arg(ctx.in(0)).arg(occupied_).arg(cell_offset_).arg(res_).arg(bound_).arg(scale_).arg(use_open ? range.open : open_.get())
@@ -136,6 +135,8 @@ class PackOp final : public Op {
     uploaded_ = std::move(key);
   }
 
+  // Rows per compaction block (PACK_BLOCK): declared first, it sizes blocks_.
+  const PackParams pack_ = pack_params();
   std::shared_ptr<PackSelect> select_;
   int extent_;
   size_t batches_, rows_, multiple_, blocks_;

@@ -1,9 +1,7 @@
 // The compositing render op: N NeRFs along shared samples, blended per sample (render.cl).
-#include <charconv>
-#include <sstream>
-
 #include "nova/executor.hpp"
 #include "nova/render.hpp"
+#include "nova/tuning.hpp"
 #include "op_util.hpp"
 
 namespace nova {
@@ -79,21 +77,9 @@ class RenderCompositeOp final : public Op {
 }  // namespace
 
 std::string render_program_options(size_t nerfs, const RenderOptions& o) {
-  std::ostringstream s;
-  s << "-DNERFS=" << nerfs << " -DRGB_SIGMOID=" << o.rgb_sigmoid
-    << " -DBLEND_SIGMOID=" << o.blend_sigmoid << " -DHARD_BLEND=" << o.hard_blend;
-  // The conventions beyond nova's own are named only when set: nova's programs keep their
-  // options (and source after preprocessing) unchanged.
-  const RenderOptions plain;
-  if (o.blend_eps != plain.blend_eps) {
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, o.blend_eps);
-    s << " -DBLEND_EPS=" << std::string(buf, r.ptr) << "f";
-  }
-  if (o.alpha_full_sum) s << " -DALPHA_FULL_SUM=1";
-  if (o.no_blend) s << " -DNO_BLEND=1";
-  if (o.nerf_depth) s << " -DNERF_DEPTH=1";
-  return s.str();
+  return RenderParams{nerfs, o.rgb_sigmoid, o.blend_sigmoid, o.hard_blend, o.blend_eps,
+                      o.alpha_full_sum, o.no_blend, o.nerf_depth}
+      .to_defines();
 }
 
 RenderOutputs render_composite(Tensor raw, Tensor delta, Tensor z, Tensor noise,

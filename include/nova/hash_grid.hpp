@@ -11,10 +11,9 @@
 #include <vector>
 
 #include "nova/graph.hpp"
+#include "nova/tuning.hpp"
 
 namespace nova {
-
-struct DeviceInfo;
 
 struct HashGridConfig {
   int levels = 16;
@@ -63,12 +62,7 @@ Tensor hash_grid_table(Graph& g, const std::string& name, const HashGridConfig& 
 // never trained).
 Tensor hash_encoding(Tensor positions, Tensor table, const HashGridConfig& c);
 
-// How the table gradient is summed; both are bit-reproducible. Ordered: one work-item per
-// network and level walks the rows in order (float sums). Atomic: one work-item per row and
-// level, fixed-point 64-bit atomics (exact integer sums, rounded to float once), needs
-// cl_khr_int64_base_atomics. NOVA_HASH_BACKWARD=auto|ordered|atomic chooses; auto takes
-// atomic on devices other than CPUs that have the extension.
-enum class HashBackward { Ordered, Atomic };
-HashBackward hash_backward_choice(const DeviceInfo& device);
+// How the table gradient is summed per device (HashBackward, hash_backward_choice): the
+// tuning database's, tuning.hpp.
 
 }  // namespace nova

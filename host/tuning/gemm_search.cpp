@@ -1,6 +1,7 @@
 // The GEMM parameter search behind `nova tune`: candidates per shape class (CLBlast Xgemm
 // parameter sets, nova's own kernels, blocked-kernel variants), each timed on the device and
-// checked against a float64 host reference before it may win.
+// checked against a float64 host reference before it may win. Candidates run through a
+// GemmRunner: the GEMM op's own functions, which sit above this module.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,7 +9,7 @@
 #include <random>
 #include <sstream>
 
-#include "nova/gemm.hpp"
+#include "nova/gemm_tuning.hpp"
 
 namespace nova {
 namespace {
@@ -122,18 +123,18 @@ double gemm_error_ratio(const GemmArgs& g, const std::vector<float>& a,
   return worst;
 }
 
-std::vector<GemmCandidate> gemm_candidates(Runtime& rt, const GemmShapeClass& shape, bool quick) {
+std::vector<GemmCandidate> gemm_candidates(Runtime& rt, const GemmShapeClass& shape, bool quick,
+                                           bool host_blas) {
   std::vector<GemmCandidate> c;
   c.push_back({GemmConfig{}, {}});  // the table's CLBlast: the default, always first
   // CLBlast: every compiled parameter set costs 10-35 s on PoCL with a cold cache, so only a
   // few, spread over the valid grid (the table's own set left out).
   const auto grid = clblast_grid(rt);
   const size_t want = quick ? 1 : 3;
-  const auto& table = gemm_tuning_for(rt.info()).overrides;
+  const auto& table = device_tuning(rt.info()).xgemm;
   auto is_table = [&](const Params& p) {
-    auto it = table.find("Xgemm");
-    if (it == table.end()) return false;
-    for (const auto& [k, v] : it->second)
+    if (!table) return false;
+    for (const auto& [k, v] : table->params())
       if (!p.count(k) || p.at(k) != v) return false;
     return true;
   };
@@ -146,7 +147,7 @@ std::vector<GemmCandidate> gemm_candidates(Runtime& rt, const GemmShapeClass& sh
         ++taken;
       }
   c.push_back({GemmConfig{"kernels", {}}, {}});
-  if (host_gemm_available(rt)) c.push_back({GemmConfig{"host", {}}, {}});
+  if (host_blas) c.push_back({GemmConfig{"host", {}}, {}});
   // Blocked kernels: RM x 8 VN accumulators fit 16 AVX2 / 32 AVX-512 registers up to 12.
   std::vector<std::pair<size_t, size_t>> blocks =
       quick ? std::vector<std::pair<size_t, size_t>>{{6, 2}, {4, 2}}
@@ -170,7 +171,7 @@ std::vector<GemmCandidate> gemm_candidates(Runtime& rt, const GemmShapeClass& sh
 
 GemmSearchResult search_gemm(Runtime& rt, const GemmShapeClass& shape,
                              const std::vector<GemmCandidate>& candidates,
-                             const GemmSearchOptions& o) {
+                             const GemmRunner& runner, const GemmSearchOptions& o) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   GemmSearchResult res;
@@ -207,14 +208,14 @@ GemmSearchResult search_gemm(Runtime& rt, const GemmShapeClass& shape,
     }
     auto run = [&](const GemmArgs& g, cl_mem temp) {
       if (cand.custom) cand.custom(rt, g, temp);
-      else gemm_with(rt, cand.config, g, temp);
+      else runner.run(rt, cand.config, g, temp);
     };
     try {
       // 1. The full float64 check at the short long dimension.
       rt.upload(chk.args.c, chk.c0.data(), chk.c0.size() * sizeof(float));
       {
         Buffer temp;
-        if (size_t bytes = cand.custom ? 0 : gemm_temp_bytes_with(rt, cand.config, chk.args))
+        if (size_t bytes = cand.custom ? 0 : runner.temp_bytes(rt, cand.config, chk.args))
           temp = rt.alloc(bytes);
         run(chk.args, temp.get());
       }
@@ -227,7 +228,7 @@ GemmSearchResult search_gemm(Runtime& rt, const GemmShapeClass& shape,
       } else {
         // 2. Timing at the full size, then sampled rows of that product.
         Buffer temp;
-        if (size_t bytes = cand.custom ? 0 : gemm_temp_bytes_with(rt, cand.config, big.args))
+        if (size_t bytes = cand.custom ? 0 : runner.temp_bytes(rt, cand.config, big.args))
           temp = rt.alloc(bytes);
         std::vector<double> times;
         for (int r = 0; r <= o.repeats; ++r) {  // r = 0 warms up (and compiles)

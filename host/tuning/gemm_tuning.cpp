@@ -1,11 +1,10 @@
-// GEMM tuning: the static per-device table (CLBlast kernel parameters that beat its defaults),
-// the per-device cache of measured winners (`nova tune`), and applying both.
-// Table entries are matched on device type and vendor; values come from measurements on the
-// device class, not guesses.
+// GEMM tuning: configurations and shape classes, the per-device cache of measured winners
+// (`nova tune`), and the winner a GEMM runs with.
+#include "nova/gemm_tuning.hpp"
+
 #include <clblast.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -16,44 +15,15 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "nova/gemm.hpp"
 #include "runtime/parse_number.hpp"
 
 namespace nova {
 namespace {
 
-GemmTuning pocl_cpu() {
-  GemmTuning t;
-  t.name = "pocl-cpu";
-  // Measured on PoCL 3.1 (AVX-512): 12-18 GFLOP/s forward and 17-21 for the weight gradient,
-  // against 11.5 / 2.8 with the defaults (a 6x win on dW = X^T dY).
-  t.overrides["Xgemm"] = {{"GEMMK", 0}, {"KREG", 1},  {"STRM", 0},  {"STRN", 0},
-                          {"SA", 1},    {"SB", 1},    {"MWG", 64},  {"NWG", 64},
-                          {"KWG", 16},  {"MDIMC", 8}, {"NDIMC", 8}, {"MDIMA", 8},
-                          {"NDIMB", 8}, {"KWI", 2},   {"VWM", 8},   {"VWN", 8}};
-  // Always the indirect path: one compiled program instead of two (a cold PoCL compile costs
-  // 10-35 s per CLBlast program), and MLP layers are large anyway.
-  t.overrides["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", 0}};
-  return t;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
-using Params = std::unordered_map<std::string, size_t>;
-
-// What nova knows per device: CLBlast's own Xgemm parameters (read before the table is
-// applied), the Xgemm set applied now, and the cache's winners.
-struct DeviceState {
-  Params library_xgemm;
-  std::string applied;  // GemmConfig::str() of the Xgemm set CLBlast holds now
-  std::map<GemmShapeClass, GemmConfig> winners;
-};
-
-std::recursive_mutex state_mutex;
-std::map<cl_device_id, DeviceState> states;
+// The cache's winners per device, loaded once (load_gemm_cache) or on request
+// (reload_gemm_cache).
+std::mutex winners_mutex;
+std::map<cl_device_id, std::map<GemmShapeClass, GemmConfig>> winners_by_device;
 
 // Tab-separated fields; a field's tab, newline, carriage return and backslash are escaped.
 std::string escape(const std::string& s) {
@@ -128,28 +98,69 @@ bool same_device(const GemmCacheEntry& a, const GemmCacheEntry& b) {
          a.clblast == b.clblast;
 }
 
-void load_winners(DeviceState& st, const DeviceInfo& info,
-                  const std::vector<GemmCacheEntry>& entries) {
-  st.winners.clear();
+std::map<GemmShapeClass, GemmConfig> device_winners(const DeviceInfo& info,
+                                                    const std::vector<GemmCacheEntry>& entries) {
+  std::map<GemmShapeClass, GemmConfig> winners;
   const GemmCacheEntry key = gemm_cache_key(info);
   for (const auto& e : entries)
-    if (same_device(e, key)) st.winners[e.shape] = e.config;
+    if (same_device(e, key)) winners[e.shape] = e.config;
+  return winners;
 }
 
 }  // namespace
 
-std::mutex& clblast_mutex() {
-  static std::mutex m;
-  return m;
+std::string GemmConfig::str() const {
+  std::string s = provider;
+  for (const auto& [k, v] : params) s += " " + k + "=" + std::to_string(v);
+  return s;
 }
 
-const GemmTuning& gemm_tuning_for(const DeviceInfo& device) {
-  static const GemmTuning defaults{"clblast-defaults", {}};
-  static const GemmTuning pocl = pocl_cpu();
-  const bool is_pocl = lower(device.platform_name).find("portable computing") != std::string::npos ||
-                       lower(device.opencl_version).find("pocl") != std::string::npos;
-  if (is_pocl && (device.type & CL_DEVICE_TYPE_CPU)) return pocl;
-  return defaults;
+GemmConfig GemmConfig::parse(const std::string& text) {
+  std::istringstream in(text);
+  GemmConfig c;
+  if (!(in >> c.provider) ||
+      (c.provider != "clblast" && c.provider != "kernels" && c.provider != "blocked" &&
+       c.provider != "host"))
+    throw Error("'" + text + "' is no GEMM configuration (clblast|kernels|blocked|host KEY=VALUE...)");
+  for (std::string item; in >> item;) {
+    const size_t eq = item.find('=');
+    const std::optional<unsigned long long> v =
+        eq == std::string::npos || eq == 0 ? std::nullopt : parse_whole_unsigned(item.substr(eq + 1));
+    if (!v || item[eq + 1] == '-') throw Error("'" + text + "': '" + item + "' is not KEY=unsigned integer");
+    c.params[item.substr(0, eq)] = static_cast<size_t>(*v);
+  }
+  if ((c.provider == "kernels" || c.provider == "host") && !c.params.empty())
+    throw Error("'" + text + "': the " + c.provider + " provider takes no parameters");
+  if (c.provider == "blocked") blocked_gemm_params(c);  // validates
+  return c;
+}
+
+BlockedGemmParams blocked_gemm_params(const GemmConfig& c) {
+  BlockedGemmParams b;
+  for (const auto& [key, v] : c.params) {
+    if (key == "RM") b.rm = v;
+    else if (key == "VN") b.vn = v;
+    else if (key == "KC") b.kc = v;
+    else if (key == "TA") b.ta = v;
+    else throw Error("GEMM configuration '" + c.str() + "': unknown parameter " + key);
+  }
+  if (b.rm < 1 || b.rm > 16 || b.vn < 1 || b.vn > 4 || b.ta > 1)
+    throw Error("GEMM configuration '" + c.str() + "': RM must be 1..16, VN 1..4, TA 0 or 1");
+  return b;
+}
+
+std::optional<GemmShapeClass> gemm_shape_class(const GemmArgs& g) {
+  if (g.trans_a && g.trans_b) return std::nullopt;
+  size_t long_dim = g.trans_a ? g.k : g.m;
+  if (long_dim < kGemmTunedMinRows) return std::nullopt;
+  size_t p = 1;
+  while (p * 2 <= long_dim) p *= 2;
+  const char* kind = g.trans_a ? "tn" : g.trans_b ? "nt" : "nn";
+  return GemmShapeClass{kind, g.trans_a ? g.m : p, g.n, g.trans_a ? p : g.k};
+}
+
+std::string GemmShapeClass::str() const {
+  return kind + " " + std::to_string(m) + "x" + std::to_string(n) + "x" + std::to_string(k);
 }
 
 std::string clblast_version() {
@@ -275,55 +286,6 @@ void merge_gemm_cache(const std::string& path, const std::vector<GemmCacheEntry>
   write_gemm_cache(path, all);
 }
 
-// Called with clblast_mutex() held.
-void apply_clblast_config(Runtime& rt, const GemmConfig& cfg) {
-  std::lock_guard<std::recursive_mutex> lock(state_mutex);
-  DeviceState& st = states[rt.device()];
-  const std::string sig = cfg.str();
-  if (st.applied == sig) return;
-  const GemmTuning& table = gemm_tuning_for(rt.info());
-  Params params = st.library_xgemm;
-  if (auto it = table.overrides.find("Xgemm"); it != table.overrides.end())
-    for (const auto& [k, v] : it->second) params[k] = v;
-  for (const auto& [k, v] : cfg.params) {
-    if (!cfg.params.empty() && !params.empty() && !params.count(k))
-      throw Error("GEMM configuration '" + sig + "': CLBlast's Xgemm has no parameter " + k);
-    params[k] = v;
-  }
-  if (params.empty()) {  // nothing known and nothing asked: CLBlast's defaults are in force
-    st.applied = sig;
-    return;
-  }
-  st.applied.clear();
-  const auto status = clblast::OverrideParameters(rt.device(), "Xgemm",
-                                                  clblast::Precision::kSingle, params);
-  if (status != clblast::StatusCode::kSuccess)
-    throw Error("CLBlast rejected the Xgemm parameters of '" + sig + "' (status " +
-                std::to_string(static_cast<int>(status)) + ")");
-  st.applied = sig;
-}
-
-void configure_gemm(Runtime& rt) {
-  std::lock_guard<std::mutex> clblast_lock(clblast_mutex());
-  std::lock_guard<std::recursive_mutex> lock(state_mutex);
-  if (states.count(rt.device())) return;
-  DeviceState& st = states[rt.device()];
-  Params lib;
-  if (clblast::RetrieveParameters(rt.device(), "Xgemm", clblast::Precision::kSingle, lib) ==
-      clblast::StatusCode::kSuccess)
-    st.library_xgemm = lib;
-  for (const auto& [kernel, params] : gemm_tuning_for(rt.info()).overrides) {
-    const auto status = clblast::OverrideParameters(rt.device(), kernel,
-                                                    clblast::Precision::kSingle, params);
-    if (status != clblast::StatusCode::kSuccess)
-      throw Error("CLBlast rejected the tuning of " + kernel + " (status " +
-                      std::to_string(static_cast<int>(status)) + ")",
-                  kExitInternal);
-  }
-  st.applied = GemmConfig{}.str();
-  load_winners(st, rt.info(), read_gemm_cache_or_warn(gemm_tuning_cache_path(), std::cerr));
-}
-
 std::vector<GemmCacheEntry> read_gemm_cache_or_warn(const std::string& path, std::ostream& warn) {
   try {
     return read_gemm_cache(path);
@@ -336,21 +298,27 @@ std::vector<GemmCacheEntry> read_gemm_cache_or_warn(const std::string& path, std
   return {};
 }
 
+void load_gemm_cache(Runtime& rt) {
+  std::lock_guard<std::mutex> lock(winners_mutex);
+  if (winners_by_device.count(rt.device())) return;
+  winners_by_device[rt.device()] =
+      device_winners(rt.info(), read_gemm_cache_or_warn(gemm_tuning_cache_path(), std::cerr));
+}
+
 size_t reload_gemm_cache(Runtime& rt, const std::string& path) {
-  configure_gemm(rt);
-  std::lock_guard<std::recursive_mutex> lock(state_mutex);
   const auto entries = read_gemm_cache(path);
-  DeviceState& st = states[rt.device()];
-  load_winners(st, rt.info(), entries);
-  return st.winners.size();
+  std::lock_guard<std::mutex> lock(winners_mutex);
+  auto& winners = winners_by_device[rt.device()];
+  winners = device_winners(rt.info(), entries);
+  return winners.size();
 }
 
 std::optional<GemmConfig> tuned_gemm_config(Runtime& rt, const GemmArgs& g) {
   const auto shape = gemm_shape_class(g);
   if (!shape) return std::nullopt;
-  configure_gemm(rt);
-  std::lock_guard<std::recursive_mutex> lock(state_mutex);
-  const auto& winners = states[rt.device()].winners;
+  load_gemm_cache(rt);
+  std::lock_guard<std::mutex> lock(winners_mutex);
+  const auto& winners = winners_by_device[rt.device()];
   if (winners.empty()) return std::nullopt;
   if (auto it = winners.find(*shape); it != winners.end()) return it->second;
   // The nearest tuned long dimension within a factor of 4 (same kind and widths).
