@@ -92,7 +92,7 @@ export POCL_CACHE_DIR=$(pwd)/$BUILD/pocl-cache
 "$BUILD/nova-bench" mlp --batches 4099 --depth 6 --width 64 --repeats 1 | sed -n '1,8p'
 "$BUILD/nova-bench" render --rays 4099 --samples 16 --repeats 1 | sed -n '1,10p'
 if [ "$QUICK" -eq 1 ]; then
-  ctest --test-dir "$BUILD" -j2 --output-on-failure -R '^(warm_kernel_cache|odd_sizes|kernel_portability|core_link_is_lean)$'
+  ctest --test-dir "$BUILD" -j2 --output-on-failure -R '^(warm_kernel_cache|op_table|kernel_portability|core_link_is_lean)$'
 else
   ctest --test-dir "$BUILD" -j2 --output-on-failure
 fi

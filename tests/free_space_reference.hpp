@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "harness.hpp"
 #include "nova/executor.hpp"
 #include "nova/losses.hpp"
 #include "nova/ops.hpp"
@@ -95,7 +96,7 @@ inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool dep
                               f.behind);
   g.keep(fs);
   g.set_loss(depth_also_in_mse ? weighted_sum({depth_mse, fs}, {1.0f, 1.0f}) : fs);
-  Executor ex(rt, g);
+  Executor ex(rt, g, guarded_options());
   ex.set(raw, f.raw);
   ex.set(delta, f.delta);
   ex.set(z, f.z);

@@ -15,6 +15,12 @@ Runtime& runtime() {
   return *rt;
 }
 
+ExecutorOptions guarded_options() {
+  ExecutorOptions o;
+  o.guard_bytes = 1024;  // 256 floats: past any tile or vector width a kernel could overrun
+  return o;
+}
+
 std::vector<float> random_floats(size_t n, float lo, float hi, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(lo, hi);
@@ -70,7 +76,7 @@ double check_gradients(const BuildFn& build, const std::vector<std::vector<float
   BOOST_REQUIRE_EQUAL(op.inputs.size(), values.size());
   Tensor target = g.input("target", op.output.shape());
   g.set_loss(mse(op.output, target));
-  Executor ex(runtime(), g);
+  Executor ex(runtime(), g, guarded_options());
   for (size_t i = 0; i < values.size(); ++i) ex.set(op.inputs[i], values[i]);
   ex.set(target, random_floats(op.output.shape().numel(), -1.0f, 1.0f, o.seed));
   ex.forward();
@@ -117,7 +123,7 @@ std::vector<float> run_forward(const BuildFn& build, const std::vector<std::vect
   Graph g;
   OpUnderTest op = build(g);
   g.keep(op.output);
-  Executor ex(runtime(), g);
+  Executor ex(runtime(), g, guarded_options());
   for (size_t i = 0; i < values.size(); ++i) ex.set(op.inputs[i], values[i]);
   ex.forward();
   return ex.get(op.output);

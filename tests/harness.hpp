@@ -15,6 +15,10 @@ namespace nova::test {
 // The device under test: NOVA_DEVICE if set, else nova's default choice.
 Runtime& runtime();
 
+// Executor options of the op checks: every tensor in a region of its own between guards that
+// the executor checks after every op (ExecutorOptions::guard_bytes).
+ExecutorOptions guarded_options();
+
 std::vector<float> random_floats(size_t n, float lo, float hi, unsigned seed);
 std::vector<double> to_double(const std::vector<float>& v);
 
@@ -42,17 +46,17 @@ struct GradCheckOptions {
   unsigned seed = 7;
 };
 
-// Builds the graph, appends loss = mse(output, random target), sets `values` (one vector per
-// input), runs forward + backward and compares the gradient of every input that requires one
-// with central differences of the same device forward (in float32). Returns the worst
-// normalised error over all checked components.
 // Runs a forward pass of the graph `build` makes on `values` (one vector per input) and
-// returns its output.
+// returns its output (guarded).
 std::vector<float> run_forward(const BuildFn& build, const std::vector<std::vector<float>>& values);
 
 // Float64 value of an activation, the reference of the bias_act kernels.
 double activation_reference(Activation a, double x);
 
+// Builds the graph, appends loss = mse(output, random target), sets `values` (one vector per
+// input), runs forward + backward (guarded) and compares the gradient of every input that
+// requires one with central differences of the same device forward (in float32). Returns the
+// worst normalised error over all checked components.
 double check_gradients(const BuildFn& build, const std::vector<std::vector<float>>& values,
                        const GradCheckOptions& options = {});
 

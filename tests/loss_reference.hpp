@@ -1,7 +1,7 @@
 #pragma once
-// Float64 host references of the novel-view losses (losses.hpp), straight from their
-// definitions, and the smooth raw fields the loss tests feed them. Shared by test_losses.cpp
-// and test_odd_sizes.cpp.
+// Float64 host references of the novel-view losses and the depth loss (losses.hpp), straight
+// from their definitions, and the smooth raw fields the loss tests feed them. Shared by test_losses.cpp
+// and the op table (op_table_losses.cpp).
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -61,6 +61,25 @@ inline double ref_alpha(const std::vector<float>& raw, const std::vector<float>&
         s += (1 - masks[n * R + r]) * (alpha + loss_sigmoid(raw[at * 5 + 4]));
       }
   return s / double((N - 1) * R * S);
+}
+
+// depth_loss (losses.hpp) on depths d, targets t and valid flags w: the mean squared
+// difference of the standardised valid depths and targets; 0 with fewer than two valid rays.
+inline double ref_depth_loss(const std::vector<double>& d, const std::vector<float>& t, const std::vector<float>& w) {
+  const size_t R = d.size();
+  double n = 0, sp = 0, st = 0;
+  for (size_t r = 0; r < R; ++r) n += w[r], sp += w[r] * d[r], st += w[r] * t[r];
+  if (n < 2) return 0;
+  const double mp = sp / n, mt = st / n;
+  double vp = 0, vt = 0;
+  for (size_t r = 0; r < R; ++r) vp += w[r] * (d[r] - mp) * (d[r] - mp), vt += w[r] * (t[r] - mt) * (t[r] - mt);
+  const double sdp = std::sqrt(vp / n + 1e-6), sdt = std::sqrt(vt / n + 1e-6);
+  double sum = 0;
+  for (size_t r = 0; r < R; ++r) {
+    const double e = (d[r] - mp) / sdp - (t[r] - mt) / sdt;
+    sum += w[r] * e * e;
+  }
+  return sum / n;
 }
 
 }  // namespace nova::test

@@ -1,7 +1,7 @@
 #pragma once
 // Float64 host references of the ray ops (kernels/sampling.cl), written from the conventions
 // (camera.hpp, the reference code's ndc_rays and stratified sampling) and independent of the
-// kernels. Shared by test_rays.cpp and test_odd_sizes.cpp.
+// kernels. Shared by test_rays.cpp and the op table (op_table_render.cpp).
 #include <array>
 #include <cmath>
 #include <vector>
@@ -146,7 +146,7 @@ inline void check_instance_points(Runtime& rt, size_t rows, unsigned seed) {
     o.ay = static_cast<float>(ay);
     Tensor out = instance_points(pos, tr, o);
     g.keep(out);
-    Executor ex(rt, g);
+    Executor ex(rt, g, guarded_options());
     ex.set(pos, q);
     ex.set(tr, xf);
     ex.forward();

@@ -168,7 +168,7 @@ inline DeviceRender run_device_render(const RenderRefInput& in, const RenderTarg
     terms.push_back(mse(x, target_tensors.back()));
   }
   g.set_loss(weighted_sum(terms, std::vector<float>(terms.size(), 1.0f)));
-  ExecutorOptions eo;
+  ExecutorOptions eo = guarded_options();
   eo.check_finite = check_finite;
   Executor ex(runtime(), g, eo);
   ex.set(raw, to_float(in.raw));

@@ -4,8 +4,8 @@
 // host references and central finite differences; and the sample ranges and open rays that
 // early ray termination packs on top of the grids.
 //
-// Sizes: M = 1009 samples (prime) per batch, so every launch is ragged; these ops are left
-// out of test_odd_sizes' sweep for that reason.
+// Sizes: M = 1009 samples (prime) per batch, so every launch is ragged (the op table's
+// packing entry, tests/op_table_grid.cpp, covers each op alone and its launches).
 // Tolerances: gather, fill and scatter move floats, so they must be exact. The MLP on packed
 // rows is a sum of K = 3 + 3 * 2 * 2 + 3 = 18 float32 products per output, each input within
 // 1 of 0 and weights within 1: rtol 1e-5 with atol 1e-5 covers float32 rounding (18 * 6e-8
@@ -19,6 +19,7 @@
 #include <memory>
 
 #include "harness.hpp"
+#include "packing_reference.hpp"
 #include "nova/error.hpp"
 #include "nova/executor.hpp"
 #include "nova/occupancy.hpp"
@@ -26,24 +27,13 @@
 #include "nova/render.hpp"
 
 using namespace nova;
+using nova::test::checker_grid;
 using nova::test::random_floats;
 
 namespace {
 
 constexpr size_t B = 2, M = 1009, F = 2;  // batches, dense rows, posenc frequencies
 constexpr size_t D = 3, E = D * (1 + 2 * F) + D, H = 4;  // input, encoded + raw, hidden
-
-// A grid with a checkerboard of occupied cells (every cell evaluated).
-OccupancyGrid checker_grid(int res, int phase) {
-  OccupancyGrid g(res, 1.0f, 0.01f);
-  const size_t r = static_cast<size_t>(res);
-  for (size_t c = 0; c < g.cells(); ++c) {
-    const size_t x = c % r, y = (c / r) % r, z = c / (r * r);
-    g.density[c] = (x + y + z + static_cast<size_t>(phase)) % 2 ? 10.0f * g.threshold() : 0.0f;
-  }
-  g.refresh();
-  return g;
-}
 
 std::shared_ptr<PackSelect> two_grid_select() {
   auto s = std::make_shared<PackSelect>();
@@ -72,36 +62,9 @@ std::vector<std::vector<size_t>> reference_kept(const std::vector<float>& pos, c
   return kept;
 }
 
-// Early termination's rules on top of the grids (SampleRange): sample index m % S in
-// [first, end) of rays m / S that are open (`open`: the host copy of the range's flags, empty
-// when it has none). Plain integer logic, the reference of the pack kernels.
-bool in_sample_range(const PackSelect& s, const std::vector<uint8_t>& open, size_t m) {
-  const SampleRange& g = s.range;
-  if (g.samples_per_ray == 0) return true;
-  const size_t i = m % g.samples_per_ray, r = m / g.samples_per_ray;
-  return i >= g.first && i < g.end && (open.empty() || open[r]);
-}
-
-// The kept rows of `rows` per batch: grids (when enabled) and the sample range.
 std::vector<std::vector<size_t>> reference_range_kept(const std::vector<float>& pos, const PackSelect& s,
                                                       const std::vector<uint8_t>& open, size_t rows) {
-  std::vector<std::vector<size_t>> kept(B);
-  for (size_t b = 0; b < B; ++b)
-    for (size_t m = 0; m < rows; ++m) {
-      bool keep = in_sample_range(s, open, m);
-      if (keep && s.enabled && s.grids) {
-        const OccupancyGrid& g = (*s.grids)[static_cast<size_t>(s.grid_of_batch[b])];
-        size_t c = 0;
-        for (int d = 2; d >= 0; --d) {
-          const double u = (double(pos[(b * rows + m) * 3 + d]) + 1.0) / 2.0 * g.resolution;
-          const int i = std::clamp(static_cast<int>(std::floor(u)), 0, g.resolution - 1);
-          c = c * static_cast<size_t>(g.resolution) + static_cast<size_t>(i);
-        }
-        keep = g.occupied[c];
-      }
-      if (keep) kept[b].push_back(m);
-    }
-  return kept;
+  return test::reference_range_kept(pos, s, open, B, rows);
 }
 
 // positions [B, rows, 3] packed, gathered and scattered back with fill -7: each kept row is

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <iomanip>
 #include <random>
 #include <sstream>
@@ -63,6 +64,18 @@ void copy_parameters(Executor& to, Executor& from, const std::string& prefix) {
       if (q.info().name == name) to.set(p, from.get(q));
   }
 }
+
+namespace {
+// A float NaN with a payload no kernel computes: a guard float that still holds it was not
+// written.
+constexpr uint32_t kGuardPattern = 0x7fa5a5a5u;
+
+void fill_guard_pattern(Runtime& rt, cl_mem arena, size_t bytes) {
+  float pattern;
+  std::memcpy(&pattern, &kGuardPattern, sizeof(pattern));
+  rt.fill_floats(arena, pattern, bytes);
+}
+}  // namespace
 
 // ---- schedule and memory ---------------------------------------------------------------------
 
@@ -170,6 +183,20 @@ void Executor::allocate() {
   }
 
   const size_t align = std::max<size_t>(rt_.info().base_addr_align_bytes, 256);
+  // Guarded (tests): one region per lifetime for the whole run, a guard on both sides; the
+  // region before a sub-buffer is whole alignment units so that the sub-buffer stays aligned.
+  const size_t guard = (options_.guard_bytes + align - 1) / align * align;
+  std::vector<size_t> bytes(lives.size());
+  for (size_t i = 0; i < lives.size(); ++i) {
+    bytes[i] = lives[i].bytes;
+    if (!guard) continue;
+    lives[i] = {guard + bytes[i] + guard, 0, end_step};
+    const auto [kind, index] = owner[i];
+    guard_owner_.push_back(kind == 0   ? "tensor '" + graph_.tensor(index).name + "'"
+                           : kind == 1 ? "the gradient of '" + graph_.tensor(index).name + "'"
+                                       : std::string(kind == 2 ? "forward" : "backward") +
+                                             " workspace of node " + std::to_string(index));
+  }
   plan_ = plan_memory(lives, align);
   if (plan_.peak_bytes > rt_.info().max_alloc_bytes)
     throw Error("the graph needs " + std::to_string(plan_.peak_bytes >> 20) +
@@ -182,8 +209,17 @@ void Executor::allocate() {
   grads_.resize(nt);
   fwd_workspace_.resize(nn);
   bwd_workspace_.resize(nn);
+  if (guard) {
+    fill_guard_pattern(rt_, arena_.get(), plan_.peak_bytes);
+    for (size_t i = 0; i < lives.size(); ++i) {
+      guards_.push_back({plan_.offsets[i], guard, static_cast<int>(i), false});
+      // Workspaces may end inside a float: the guard after one starts at the next float.
+      const size_t end = plan_.offsets[i] + guard + bytes[i], after = (end + 3) / 4 * 4;
+      guards_.push_back({after, guard - (after - end), static_cast<int>(i), true});
+    }
+  }
   for (size_t i = 0; i < lives.size(); ++i) {
-    Buffer b = rt_.sub_buffer(arena_, plan_.offsets[i], lives[i].bytes);
+    Buffer b = rt_.sub_buffer(arena_, plan_.offsets[i] + guard, bytes[i]);
     auto [kind, index] = owner[i];
     (kind == 0 ? values_ : kind == 1 ? grads_ : kind == 2 ? fwd_workspace_ : bwd_workspace_)[index] =
         std::move(b);
@@ -251,6 +287,7 @@ void Executor::run_node(int n, Pass pass) {
   else
     op.backward(ctx);
   if (options_.check_finite) check_finite(n, pass);
+  if (!guards_.empty()) check_guards(n, pass);
 }
 
 void Executor::run_pass(const std::vector<int>& nodes, Pass pass) {
@@ -328,6 +365,22 @@ void Executor::check_finite(int n, Pass pass) {
     for (TensorId t : op.inputs())
       if (has_grad_[t]) check(t, grads_[t].get(), "the gradient of");
   }
+}
+
+void Executor::check_guards(int n, Pass pass) {
+  std::vector<uint32_t> arena(plan_.peak_bytes / sizeof(uint32_t));
+  rt_.download(arena_.get(), arena.data(), arena.size() * sizeof(uint32_t));
+  for (const Guard& g : guards_)
+    for (size_t i = g.offset / 4; i < (g.offset + g.bytes) / 4; ++i)
+      if (arena[i] != kGuardPattern) {
+        std::ostringstream s;
+        s << "the " << (pass == Pass::Forward ? "forward" : "backward") << " of op '"
+          << graph_.node(n).type() << "' (node " << n << ") wrote "
+          << (g.after ? "past the end" : "before the start") << " of " << guard_owner_.at(g.owner)
+          << " (float " << (g.after ? (i * 4 - g.offset) / 4 : (g.offset + g.bytes - i * 4) / 4 - 1)
+          << (g.after ? " after it" : " before it") << " changed)";
+        throw Error(s.str(), kExitInternal);
+      }
 }
 
 // ---- host access -----------------------------------------------------------------------------

@@ -16,6 +16,10 @@ struct ExecutorOptions {
   bool profile = false;       // time every op with OpenCL profiling events
   bool check_finite = false;  // after every op, stop at the first NaN/Inf, naming op and tensor
   unsigned seed = 1;          // parameter initialisation
+  // Tests only: every activation, gradient and workspace gets a region of its own (no reuse)
+  // between two guards of at least this many bytes, filled with a pattern that every op is
+  // checked not to have changed (an op writing past its tensor). 0: the planned arena.
+  size_t guard_bytes = 0;
 };
 
 // What an op sees while it runs: its tensors' buffers and shapes, and gradient slots.
@@ -118,6 +122,7 @@ class Executor {
   void run_node(int node, Pass pass);
   void run_pass(const std::vector<int>& nodes, Pass pass);
   void check_finite(int node, Pass pass);
+  void check_guards(int node, Pass pass);
 
   Runtime& rt_;
   Graph& graph_;
@@ -134,6 +139,13 @@ class Executor {
   std::vector<Buffer> fwd_workspace_, bwd_workspace_;  // per node
   MemoryPlan plan_;
   bool forward_done_ = false;
+  struct Guard {
+    size_t offset, bytes;  // in the arena
+    int owner;             // index into lives: a tensor, a gradient or a workspace
+    bool after;            // the guard after the region (else before it)
+  };
+  std::vector<Guard> guards_;
+  std::vector<std::string> guard_owner_;
 
   std::map<std::string, OpTiming> timings_;
   std::vector<size_t> extents_;  // live rows per graph extent

@@ -1,0 +1,86 @@
+#pragma once
+// Float64 reference of the hash encoding (include/nova/hash_grid.hpp, kernels/hashgrid.cl):
+// the vertices each position reads with their weights, the encoding they sum to, and the
+// positions the tests draw.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "harness.hpp"
+#include "nova/hash_grid.hpp"
+
+namespace nova::test {
+
+// Every vertex a float64 evaluation of the encoding reads: visit(row, level, table row,
+// weight) for each corner of each level of each of `rows` positions [M, D] (one network).
+template <class Visit>
+void for_each_vertex(const std::vector<float>& pos, size_t rows, size_t dims, const HashGridConfig& c, Visit visit) {
+  const std::vector<float> res = hash_grid_resolutions(c), res_t = hash_grid_time_resolutions(c);
+  const uint64_t T = uint64_t{1} << c.log2_size;
+  const uint32_t primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
+  for (size_t r = 0; r < rows; ++r) {
+    for (int l = 0; l < c.levels; ++l) {
+      // The 4th coordinate is time: on [-1, 1] with its own cell count.
+      double R[4], bound[4];
+      for (size_t d = 0; d < dims; ++d) {
+        const bool time = d == 3;
+        R[d] = time ? res_t[l] : res[l];
+        bound[d] = time ? 1.0 : c.half_size(static_cast<int>(d));
+      }
+      double vertices = 1;
+      for (size_t d = 0; d < dims; ++d) vertices *= R[d] + 1;
+      const bool dense = vertices <= static_cast<double>(T);
+      uint32_t cell[4];
+      double frac[4];
+      for (size_t d = 0; d < dims; ++d) {
+        // With `extend`, hashed levels place a point beyond the box in cells of their own
+        // (a cell before it wraps modulo 2^32); time and dense levels clamp.
+        const bool extend = c.extend && !dense && d != 3;
+        const double v = 0.5 * (pos[r * dims + d] / bound[d] + 1.0);
+        const double u = (extend ? v : std::clamp(v, 0.0, 1.0)) * R[d];
+        const double f = extend ? std::floor(u) : std::min(std::floor(u), R[d] - 1);
+        cell[d] = static_cast<uint32_t>(static_cast<int64_t>(f));
+        frac[d] = u - f;
+      }
+      for (uint32_t corner = 0; corner < (1u << dims); ++corner) {
+        double w = 1;
+        uint64_t index = 0, stride = 1;
+        uint32_t h = 0;
+        for (size_t d = 0; d < dims; ++d) {
+          const uint32_t bit = (corner >> d) & 1u, v = cell[d] + bit;
+          w *= bit ? frac[d] : 1 - frac[d];
+          index += v * stride;
+          stride *= static_cast<uint64_t>(R[d]) + 1;
+          h ^= v * primes[d];  // uint32 wrap-around, as the kernel
+        }
+        visit(r, l, dense ? index : (h & (T - 1)), w);
+      }
+    }
+  }
+}
+
+// Float64 reference of one network: positions [M, D], table [L, T, F] -> [M, L * F].
+inline std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, size_t dims,
+                                   const std::vector<float>& table, const HashGridConfig& c) {
+  const uint64_t T = uint64_t{1} << c.log2_size;
+  std::vector<double> out(rows * c.levels * c.features, 0.0);
+  for_each_vertex(pos, rows, dims, c, [&](size_t r, int l, uint64_t row, double w) {
+    for (int f = 0; f < c.features; ++f)
+      out[(r * c.levels + l) * c.features + f] += w * table[(l * T + row) * c.features + f];
+  });
+  return out;
+}
+
+// Positions in [-1.3 b, 1.3 b] (some clamped) plus the exact box corners and centre.
+inline std::vector<float> test_positions(size_t rows, size_t dims, float bound, unsigned seed) {
+  std::vector<float> p = random_floats(rows * dims, -1.3f * bound, 1.3f * bound, seed);
+  for (size_t d = 0; d < dims; ++d) {
+    p[d] = bound;
+    p[dims + d] = -bound;
+    p[2 * dims + d] = 0.0f;
+  }
+  return p;
+}
+
+}  // namespace nova::test

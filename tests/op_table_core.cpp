@@ -1,0 +1,322 @@
+// The op table's tensor and layer ops: positional_encoding, bias_act, linear, dense, concat,
+// gradient_gate, repeat_rows and the random draws. The 1009-row shapes are the odd-size sweep
+// (several work-groups and a partial last one); the 1-row ones a single, partial group.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "op_table.hpp"
+#include "nova/ops.hpp"
+#include "nova/random.hpp"
+#include "random_reference.hpp"
+
+namespace nova::test {
+
+namespace {
+
+constexpr Activation kActivations[4] = {Activation::Identity, Activation::ReLU, Activation::Sigmoid,
+                                        Activation::Softplus};
+
+double act_slope(Activation a, double x) {
+  switch (a) {
+    case Activation::ReLU: return x > 0 ? 1 : 0;
+    case Activation::Sigmoid: {
+      const double s = 1 / (1 + std::exp(-x));
+      return s * (1 - s);
+    }
+    case Activation::Softplus: return 1 / (1 + std::exp(-x));
+    default: return 1;
+  }
+}
+
+// x [M, K] (or [B, M, K]) times w [K, N] (or [B, K, N]) in float64.
+std::vector<double> matmul(const std::vector<float>& x, const std::vector<float>& w, size_t B, size_t M,
+                           size_t K, size_t N) {
+  std::vector<double> y(B * M * N, 0.0);
+  for (size_t b = 0; b < B; ++b)
+    for (size_t m = 0; m < M; ++m)
+      for (size_t n = 0; n < N; ++n) {
+        double s = 0;
+        for (size_t k = 0; k < K; ++k) s += double(x[(b * M + m) * K + k]) * w[(b * K + k) * N + n];
+        y[(b * M + m) * N + n] = s;
+      }
+  return y;
+}
+
+Shape batched(size_t B, size_t rows, size_t cols) { return B > 1 ? Shape{B, rows, cols} : Shape{rows, cols}; }
+
+OpEntry positional_encoding_entry() {
+  OpEntry e;
+  e.name = "positional_encoding";
+  // dims: rows, D, frequencies L.
+  // L = 10 reaches sin(512 x), which a stencil of 1e-2 cannot resolve: no central
+  // differences there. At L = 4 the highest band, sin(8 x), keeps the O(h^2 8^3) truncation
+  // error small at h = 1e-3.
+  OpShape wide{{37, 3, 10}, 0, "37 x 3, L 10"};
+  wide.no_fd = true;
+  OpShape fine{{11, 3, 4}, 0, "11 x 3, L 4, h 1e-3"};
+  fine.fd = GradCheckOptions{1e-3f};
+  e.shapes = {{{kOddRows, 3, 4}, 0, "1009 x 3, L 4"}, {{1, 3, 4}, 0, "1 x 3, L 4"}, {{37, 5, 2}, 0, "37 x 5, L 2"}, wide, fine};
+  e.build = [](Graph& g, const OpShape& s) {
+    Tensor p = g.input("p", Shape{s.dims[0], s.dims[1]}, true);
+    return OpGraph{{p}, {positional_encoding(p, static_cast<int>(s.dims[2]))}, {}};
+  };
+  e.values = [](const OpShape& s) { return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -1.5f, 1.5f, 101)}; };
+  const auto compute = [](const OpCase& c, bool grad) {
+    const size_t rows = c.shape.dims[0], dims = c.shape.dims[1];
+    const int L = static_cast<int>(c.shape.dims[2]);
+    const size_t width = dims * (1 + 2 * L);
+    const auto& p = c.values[0];
+    std::vector<double> ref(rows * width), dref(p.size());
+    for (size_t r = 0; r < rows; ++r)
+      for (size_t d = 0; d < dims; ++d) {
+        const double v = p[r * dims + d];
+        ref[r * width + d] = v;
+        double g = grad ? c.upstream[0][r * width + d] : 0;
+        for (int k = 0; k < L; ++k) {
+          const double f = std::ldexp(1.0, k);
+          const size_t sn = r * width + dims * (1 + 2 * k) + d, cs = sn + dims;
+          ref[sn] = std::sin(f * v);
+          ref[cs] = std::cos(f * v);
+          if (grad) g += f * (std::cos(f * v) * c.upstream[0][sn] - std::sin(f * v) * c.upstream[0][cs]);
+        }
+        dref[r * dims + d] = g;
+      }
+    return grad ? dref : ref;
+  };
+  // sin/cos of arguments up to 768: <= 4 ulp of a value <= 1, so atol 1e-6.
+  e.reference = [=](const OpCase& c) { return std::vector<Expected>{{compute(c, false), {1e-6, 1e-6}}}; };
+  e.gradient = [=](const OpCase& c) { return std::vector<Expected>{grad_expected(compute(c, true))}; };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 2 * 20; };  // sin + cos, both passes
+  return e;
+}
+
+OpEntry bias_act_entry() {
+  OpEntry e;
+  e.name = "bias_act";
+  // dims: rows, cols, batch; variant: the activation. Every activation with one and three
+  // networks at 1009 rows; 1-row and 37-row cases for the finite differences.
+  for (int a = 0; a < 4; ++a)
+    for (size_t batch : {size_t{1}, size_t{3}})
+      e.shapes.push_back({{kOddRows, 7, batch}, a, std::string(activation_name(kActivations[a])) + ", 1009 x 7 x " + std::to_string(batch)});
+  // Every activation at 29 x 17 (one and three networks; forward and float64 gradient only)
+  // and 13 x 7 (one and two; central differences too).
+  for (int a = 0; a < 4; ++a)
+    for (size_t batch : {size_t{1}, size_t{3}}) {
+      OpShape s{{29, 17, batch}, a, std::string(activation_name(kActivations[a])) + ", 29 x 17 x " + std::to_string(batch)};
+      s.no_fd = true;
+      e.shapes.push_back(s);
+    }
+  for (int a = 0; a < 4; ++a)
+    for (size_t batch : {size_t{1}, size_t{2}})
+      e.shapes.push_back({{13, 7, batch}, a, std::string(activation_name(kActivations[a])) + ", 13 x 7 x " + std::to_string(batch)});
+  e.shapes.push_back({{1, 7, 1}, 2, "sigmoid, 1 x 7"});
+  e.shapes.push_back({{37, 5, 2}, 3, "softplus, 2 x 37 x 5"});
+  e.build = [](Graph& g, const OpShape& s) {
+    const size_t rows = s.dims[0], cols = s.dims[1], batch = s.dims[2];
+    Tensor h = g.input("h", batched(batch, rows, cols), true);
+    Tensor b = g.input("b", batch > 1 ? Shape{batch, cols} : Shape{cols}, true);
+    return OpGraph{{h, b}, {bias_act(h, b, kActivations[s.variant])}, {}};
+  };
+  e.values = [](const OpShape& s) {
+    const size_t rows = s.dims[0], cols = s.dims[1], batch = s.dims[2];
+    auto h = random_floats(batch * rows * cols, -4, 4, 111);
+    const auto b = random_floats(batch * cols, -1, 1, 112);
+    // Keep h + b 1e-3 from ReLU's kink, where float32 and float64 could disagree on the side
+    // (0.05 for the finite differences' step of 1e-2).
+    const float margin = rows <= 64 ? 0.05f : 1e-3f;
+    for (size_t i = 0; i < h.size(); ++i) {
+      const float bias = b[(i / (rows * cols)) * cols + i % cols];
+      if (std::fabs(h[i] + bias) < margin) h[i] = margin - bias;
+    }
+    return std::vector<std::vector<float>>{h, b};
+  };
+  const auto compute = [](const OpCase& c, bool grad) {
+    const size_t rows = c.shape.dims[0], cols = c.shape.dims[1];
+    const Activation a = kActivations[c.shape.variant];
+    const auto &h = c.values[0], &b = c.values[1];
+    std::vector<double> ref(h.size()), dh(h.size()), db(b.size(), 0.0), db_abs(b.size(), 0.0);
+    for (size_t i = 0; i < h.size(); ++i) {
+      const size_t bi = (i / (rows * cols)) * cols + i % cols;
+      const double x = double(h[i]) + b[bi];
+      ref[i] = activation_reference(a, x);
+      if (!grad) continue;
+      dh[i] = c.upstream[0][i] * act_slope(a, x);
+      db[bi] += dh[i];
+      db_abs[bi] += std::fabs(dh[i]);
+    }
+    return std::vector<std::vector<double>>{ref, dh, db, db_abs};
+  };
+  // One rounding of the sum, <= 4 ulp for exp/log1p.
+  e.reference = [=](const OpCase& c) { return std::vector<Expected>{{compute(c, false)[0], {1e-6, 1e-5}}}; };
+  e.gradient = [=](const OpCase& c) {
+    auto r = compute(c, true);
+    // The bias gradient is a float32 two-stage sum of up to 1009 terms: error <= 1e-5 of the
+    // sum of their magnitudes.
+    const double db_scale = *std::max_element(r[3].begin(), r[3].end());
+    return std::vector<Expected>{grad_expected(r[1]), {r[2], {1e-5 * db_scale, 0}}};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 8; };
+  return e;
+}
+
+OpEntry linear_entry(bool with_bias) {
+  OpEntry e;
+  e.name = with_bias ? "dense" : "linear";
+  // dims: M, K, N, B (variant: dense's activation). K <= 9 keeps the tolerance below.
+  e.shapes = {{{1, 5, 3, 1}, 2, "1 x 5 -> 3"}, {{37, 7, 5, 1}, 3, "37 x 7 -> 5"}, {{13, 7, 11, 3}, 0, "3 x 13 x 7 -> 11"},
+              {{23, 9, 5, 1}, 0, "23 x 9 -> 5"}, {{23, 9, 5, 2}, 2, "2 x 23 x 9 -> 5"},
+              {{kOddRows, 5, 21, 1}, 1, "1009 x 5 -> 21"}};
+  e.build = [with_bias](Graph& g, const OpShape& s) {
+    const size_t M = s.dims[0], K = s.dims[1], N = s.dims[2], B = s.dims[3];
+    Tensor x = g.input("x", batched(B, M, K), true), w = g.input("w", batched(B, K, N), true);
+    if (!with_bias) return OpGraph{{x, w}, {linear(x, w)}, {}};
+    Tensor b = g.input("b", B > 1 ? Shape{B, N} : Shape{N}, true);
+    return OpGraph{{x, w, b}, {dense(x, w, b, kActivations[s.variant])}, {}};
+  };
+  e.values = [with_bias](const OpShape& s) {
+    const size_t M = s.dims[0], K = s.dims[1], N = s.dims[2], B = s.dims[3];
+    std::vector<std::vector<float>> v = {random_floats(B * M * K, -1, 1, 201), random_floats(B * K * N, -1, 1, 202)};
+    if (with_bias) v.push_back(random_floats(B * N, -1, 1, 203));
+    return v;
+  };
+  e.reference = [with_bias](const OpCase& c) {
+    const size_t M = c.shape.dims[0], K = c.shape.dims[1], N = c.shape.dims[2], B = c.shape.dims[3];
+    auto y = matmul(c.values[0], c.values[1], B, M, K, N);
+    if (with_bias)
+      for (size_t i = 0; i < y.size(); ++i)
+        y[i] = activation_reference(kActivations[c.shape.variant], y[i] + c.values[2][(i / (M * N)) * N + i % N]);
+    // K <= 9 products of values in [-1, 1]: |err| <= 2 * 9 * 2^-24 * 9 < 1e-5 (a bias and
+    // an activation add a rounding of a value <= 10).
+    return std::vector<Expected>{{y, {1e-5, 0}}};
+  };
+  // The finite differences cross ReLU's kink nowhere: the small shapes use sigmoid,
+  // softplus and identity.
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return 6.0 * double(s.dims[3] * s.dims[0] * s.dims[1] * s.dims[2]); };
+  return e;
+}
+
+OpEntry concat_entry() {
+  OpEntry e;
+  e.name = "concat";
+  e.shapes = {{{kOddRows, 3, 5}, 0, "1009 x (3 + 5)"}, {{13, 3, 5}, 0, "13 x (3 + 5)"}, {{1, 3, 5}, 0, "1 x (3 + 5)"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    Tensor a = g.input("a", Shape{s.dims[0], s.dims[1]}, true), b = g.input("b", Shape{s.dims[0], s.dims[2]}, true);
+    return OpGraph{{a, b}, {concat({a, b})}, {}};
+  };
+  e.values = [](const OpShape& s) {
+    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -1, 1, 121),
+                                           random_floats(s.dims[0] * s.dims[2], -1, 1, 122)};
+  };
+  const auto split = [](const OpShape& s, const auto& full, int part) {
+    const size_t A = s.dims[1], W = s.dims[1] + s.dims[2];
+    std::vector<double> v;
+    for (size_t r = 0; r < s.dims[0]; ++r)
+      for (size_t c = part ? A : 0; c < (part ? W : A); ++c) v.push_back(full[r * W + c]);
+    return v;
+  };
+  e.reference = [](const OpCase& c) {
+    std::vector<double> ref;
+    for (size_t r = 0; r < c.shape.dims[0]; ++r) {
+      for (size_t k = 0; k < c.shape.dims[1]; ++k) ref.push_back(c.values[0][r * c.shape.dims[1] + k]);
+      for (size_t k = 0; k < c.shape.dims[2]; ++k) ref.push_back(c.values[1][r * c.shape.dims[2] + k]);
+    }
+    return std::vector<Expected>{{ref, {0, 0}}};  // a copy: exact
+  };
+  e.gradient = [=](const OpCase& c) {
+    return std::vector<Expected>{grad_expected(split(c.shape, c.upstream[0], 0)),
+                                 grad_expected(split(c.shape, c.upstream[0], 1))};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape&) { return 0.0; };
+  return e;
+}
+
+OpEntry gradient_gate_entry() {
+  OpEntry e;
+  e.name = "gradient_gate";
+  // dims: rays R, rows per ray G, cols C, gate rows, gate row. Not differentiated by finite
+  // differences: the backward is deliberately not the forward's derivative.
+  e.shapes = {{{kOddRows, 3, 5, 2, 1}, 0, "1009 x 3 rows x 5, gate row 1 of 2"}, {{1, 1, 3, 1, 0}, 0, "1 x 1 x 3"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    Tensor x = g.input("x", Shape{s.dims[0] * s.dims[1], s.dims[2]}, true), gate = g.input("gate", Shape{s.dims[3], s.dims[0]});
+    return OpGraph{{x, gate}, {gradient_gate(x, gate, s.dims[4])}, {}};
+  };
+  e.values = [](const OpShape& s) {
+    auto gate = random_floats(s.dims[3] * s.dims[0], 0, 1, 126);
+    for (float& v : gate) v = v < 0.5f ? 0.0f : v;
+    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1] * s.dims[2], -1, 1, 124), gate};
+  };
+  e.reference = [](const OpCase& c) { return std::vector<Expected>{{to_double(c.values[0]), {0, 0}}}; };  // a copy
+  e.gradient = [](const OpCase& c) {
+    const size_t R = c.shape.dims[0], per_ray = c.shape.dims[1] * c.shape.dims[2], row = c.shape.dims[4];
+    std::vector<double> dx(c.values[0].size());
+    for (size_t i = 0; i < dx.size(); ++i) dx[i] = c.upstream[0][i] * c.values[1][row * R + i / per_ray];
+    return std::vector<Expected>{grad_expected(dx), {}};
+  };
+  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]); };
+  return e;
+}
+
+OpEntry repeat_rows_entry() {
+  OpEntry e;
+  e.name = "repeat_rows";
+  // dims: batches B, cols C, rows. Its input is data (no gradient).
+  e.shapes = {{{3, 2, kOddRows}, 0, "[3, 2] -> [3, 1009, 2]"}, {{1, 3, 1}, 0, "[1, 3] -> [1, 3]"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    Tensor x = g.input("per_batch", Shape{s.dims[0], s.dims[1]});
+    return OpGraph{{x}, {repeat_rows(x, s.dims[2])}, {}};
+  };
+  e.values = [](const OpShape& s) { return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -1, 1, 127)}; };
+  e.reference = [](const OpCase& c) {
+    std::vector<double> ref;
+    for (size_t b = 0; b < c.shape.dims[0]; ++b)
+      for (size_t r = 0; r < c.shape.dims[2]; ++r)
+        for (size_t k = 0; k < c.shape.dims[1]; ++k) ref.push_back(c.values[0][b * c.shape.dims[1] + k]);
+    return std::vector<Expected>{{ref, {0, 0}}};  // a copy: exact
+  };
+  e.flops = [](const OpShape&) { return 0.0; };
+  return e;
+}
+
+OpEntry random_entry(bool normal) {
+  OpEntry e;
+  e.name = normal ? "random_normal" : "random_uniform";
+  e.shapes = {{{kOddRows}, 0, "1009"}, {{1}, 0, "1"}};
+  const uint32_t stream = normal ? 2 : 1;
+  e.build = [=](Graph& g, const OpShape& s) {
+    auto counter = std::make_shared<DrawCounter>();
+    counter->value = 3;
+    const RandomStream rs{5, stream, counter};
+    return OpGraph{{}, {normal ? random_normal(g, "z", Shape{s.dims[0]}, rs) : random_uniform(g, "u", Shape{s.dims[0]}, rs)}, {}};
+  };
+  e.values = [](const OpShape&) { return std::vector<std::vector<float>>{}; };
+  e.reference = [=](const OpCase& c) {
+    std::vector<double> ref;
+    for (size_t i = 0; i < c.shape.dims[0]; ++i) ref.push_back(random_reference(normal, i, 5, stream, 3));
+    // Uniform values are multiples of 2^-24: exact. Normal's log/sqrt/cos/sin are within 4 ulp
+    // each (tests/test_device_random.cpp).
+    return std::vector<Expected>{{ref, normal ? Tolerance{2e-6, 2e-6} : Tolerance{0, 0}}};
+  };
+  e.flops = [=](const OpShape& s) { return double(s.dims[0]) * (normal ? 40 : 4); };
+  return e;
+}
+
+}  // namespace
+
+void register_core_ops(std::vector<OpEntry>& t) {
+  t.push_back(positional_encoding_entry());
+  t.push_back(bias_act_entry());
+  t.push_back(linear_entry(false));
+  t.push_back(linear_entry(true));
+  t.push_back(concat_entry());
+  t.push_back(gradient_gate_entry());
+  t.push_back(repeat_rows_entry());
+  t.push_back(random_entry(false));
+  t.push_back(random_entry(true));
+}
+
+}  // namespace nova::test

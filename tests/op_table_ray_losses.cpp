@@ -1,0 +1,211 @@
+// The op table's losses along rays and of depths: depth_loss, sparsity_loss, distortion_loss
+// and free_space_loss, over 1009 rays (several work-groups, a partial last one) and small
+// cases.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "distortion_reference.hpp"
+#include "free_space_reference.hpp"
+#include "loss_reference.hpp"
+#include "nova/losses.hpp"
+#include "nova/render.hpp"
+#include "op_table.hpp"
+
+namespace nova::test {
+
+namespace {
+
+// depth_loss: every fifth ray invalid; its float64 definition (loss_reference.hpp) and the
+// central differences of it (h = 1e-6, exact to ~1e-9).
+double depth_reference(const std::vector<double>& d, const std::vector<float>& t, const std::vector<float>& w) {
+  return ref_depth_loss(d, t, w);
+}
+
+OpEntry depth_loss_entry() {
+  OpEntry e;
+  e.name = "depth_loss";
+  // The central differences of the device forward (harness default: the loss is smooth away
+  // from zero variance, and the random depths keep the variance O(0.1)) up to 64 rays.
+  e.shapes = {{{kOddRows}, 0, "1009 rays"}, {{57}, 0, "57 rays"}, {{23}, 0, "23 rays"}, {{7}, 0, "7 rays"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    const Shape sh{s.dims[0]};
+    Tensor p = g.input("depth", sh, true), t = g.input("target", sh), w = g.input("valid", sh);
+    Tensor l = depth_loss(p, t, w);
+    return OpGraph{{p, t, w}, {l}, l};
+  };
+  e.values = [](const OpShape& s) {
+    std::vector<float> w(s.dims[0], 1.0f);
+    for (size_t i = 0; i < w.size(); i += 5) w[i] = 0.0f;
+    return std::vector<std::vector<float>>{random_floats(s.dims[0], 0.0f, 1.0f, 181), random_floats(s.dims[0], -2.0f, 3.0f, 182), w};
+  };
+  // The loss is a float32 sum over the rays: rtol 1e-4 (test_depth_loss_op).
+  e.reference = [](const OpCase& c) {
+    return std::vector<Expected>{{{depth_reference(to_double(c.values[0]), c.values[1], c.values[2])}, {0, 1e-4}}};
+  };
+  e.gradient = [](const OpCase& c) {
+    std::vector<double> d = to_double(c.values[0]), fd(d.size());
+    for (size_t r = 0; r < d.size(); ++r) {
+      const double x0 = d[r], h = 1e-6;
+      d[r] = x0 + h;
+      const double lp = depth_reference(d, c.values[1], c.values[2]);
+      d[r] = x0 - h;
+      const double lm = depth_reference(d, c.values[1], c.values[2]);
+      d[r] = x0;
+      fd[r] = (lp - lm) / (2 * h);
+    }
+    // The gradient carries the cancellations of the standardisation: rtol 1e-3 and atol 1e-4
+    // of the gradient's scale.
+    return std::vector<Expected>{{fd, {1e-4 * max_abs(fd), 1e-3}}, {}, {}};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return double(s.dims[0]) * 30; };
+  return e;
+}
+
+// sparsity_loss: L1 on the object NeRFs' alpha inside their masks (the static NeRF n = 0 is
+// exempt). A mean of values in [0, 1], each a few float32 roundings from its float64 value
+// (expm1 within 4 ulp): rtol 1e-5. Gradients by central differences (harness default), sigma
+// kept 0.05 from the ReLU kink the stencil would cross. dims: NeRFs N, rays R, samples S.
+OpEntry sparsity_loss_entry() {
+  OpEntry e;
+  e.name = "sparsity_loss";
+  OpShape odd{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"};
+  odd.no_fd = true;  // forward only: the stencil's cost grows with the rays
+  e.shapes = {{{3, 7, 5}, 0, "3 NeRFs x 7 rays x 5"}, odd, {{2, 1, 1}, 0, "2 NeRFs x 1 ray x 1"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2];
+    Tensor raw = g.input("raw", Shape{N, R * S, size_t(kRawChannels)}, true);
+    Tensor delta = g.input("delta", Shape{R, S}), masks = g.input("masks", Shape{N, R});
+    Tensor l = sparsity_loss(raw, delta, masks);
+    return OpGraph{{raw, delta, masks}, {l}, l};
+  };
+  e.values = [](const OpShape& s) {
+    const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2], C = kRawChannels;
+    auto raw = random_floats(N * R * S * C, -2.0f, 2.0f, 1);
+    for (size_t i = 0; i < N * R * S; ++i) {
+      float& sigma = raw[i * C + kRawSigma];
+      if (std::fabs(sigma) < 0.05f) sigma = 0.05f;
+    }
+    return std::vector<std::vector<float>>{raw, random_floats(R * S, 0.05f, 0.5f, 2), random_floats(N * R, 0.0f, 1.0f, 3)};
+  };
+  e.reference = [](const OpCase& c) {
+    const size_t N = c.shape.dims[0], R = c.shape.dims[1], S = c.shape.dims[2], C = kRawChannels;
+    const auto &raw = c.values[0], &delta = c.values[1], &masks = c.values[2];
+    double ref = 0;
+    for (size_t n = 1; n < N; ++n)
+      for (size_t r = 0; r < R; ++r)
+        for (size_t i = 0; i < S; ++i) {
+          const double sigma = std::max(0.0, double(raw[((n * R + r) * S + i) * C + kRawSigma]));
+          ref += masks[n * R + r] * -std::expm1(-sigma * delta[r * S + i]);
+        }
+    return std::vector<Expected>{{{ref / double((N - 1) * R * S)}, {0, 1e-5}}};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 10; };
+  return e;
+}
+
+OpEntry distortion_entry() {
+  OpEntry e;
+  e.name = "distortion_loss";
+  // dims: NeRFs N, rays R, samples S; variant bits: 1 the object NeRFs alone (first NeRF 1,
+  // as training uses it), 2 masks given, 4 noise given. Tolerances as
+  // tests/test_distortion_loss_op.cpp: float32 prefix sums of weights <= 1, a few 2^-24 per
+  // sample: atol 1e-6 plus rtol 1e-5; gradients by central differences at the harness
+  // default (sigma + noise kept 0.05 from the ReLU kink).
+  // Central differences with noise: without masks over every NeRF, with masks over the
+  // object NeRFs (NeRF 0's gradient must then be 0), and at one ray.
+  for (int v = 0; v < 8; ++v) {
+    OpShape s{{3, 6, 9}, v, "3 NeRFs x 6 rays x 9, first " + std::to_string(v & 1) + (v & 2 ? ", masks" : "") +
+                                (v & 4 ? ", noise" : "")};
+    s.no_fd = v != 4 && v != 7;
+    e.shapes.push_back(s);
+  }
+  OpShape odd{{2, kOddRows, 5}, 6, "2 NeRFs x 1009 rays x 5, masks, noise"};
+  odd.no_fd = true;
+  e.shapes.push_back(odd);
+  e.shapes.push_back({{2, 1, 3}, 6, "2 NeRFs x 1 ray x 3, masks, noise"});
+  e.build = [](Graph& g, const OpShape& s) {
+    const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2];
+    Tensor raw = g.input("raw", Shape{N, R * S, size_t(kRawChannels)}, true);
+    Tensor delta = g.input("delta", Shape{N, R, S}), z = g.input("z", Shape{R, S});
+    Tensor m = g.input("masks", Shape{N, R}), nz = g.input("noise", Shape{N, R * S});
+    Tensor l = distortion_loss(raw, delta, z, s.variant & 2 ? m : Tensor{}, s.variant & 4 ? nz : Tensor{},
+                               static_cast<size_t>(s.variant & 1));
+    return OpGraph{{raw, delta, z, m, nz}, {l}, l};
+  };
+  e.values = [](const OpShape& s) {
+    const DistortionInputs in = distortion_inputs(s.dims[0], s.dims[1], s.dims[2], 11);
+    return std::vector<std::vector<float>>{in.raw, in.delta, in.z, in.masks, in.noise};
+  };
+  e.reference = [](const OpCase& c) {
+    DistortionInputs in{c.shape.dims[0], c.shape.dims[1], c.shape.dims[2], c.values[0], c.values[1], c.values[2],
+                        c.values[3], c.values[4]};
+    const int v = c.shape.variant;
+    return std::vector<Expected>{{{distortion_reference(in, v & 2, v & 4, static_cast<size_t>(v & 1))}, {1e-6, 1e-5}}};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40; };
+  return e;
+}
+
+// free_space_loss: 2 NeRFs x 1009 rays x 3 samples against the float64 reference and its
+// central differences (tests/test_free_space_loss_op.cpp states the tolerances: the loss
+// rtol 1e-4, its gradient rtol 1e-3 with atol 1e-5 of the gradient's scale).
+FreeSpaceCase free_space_case(const OpShape& s) {
+  FreeSpaceCase f;
+  f.N = s.dims[0], f.R = s.dims[1], f.S = s.dims[2];
+  const size_t R = f.R;
+  f.raw = random_floats(f.N * R * f.S * f.C, -1, 1, 183);
+  for (size_t e = 0; e < f.N * R * f.S; ++e) f.raw[e * f.C + 3] = 0.3f + std::fabs(f.raw[e * f.C + 3]) * 3;
+  f.delta = random_floats(f.N * R * f.S, 0.1f, 0.4f, 184);
+  for (size_t r = 0; r < R; ++r)
+    for (size_t i = 0; i < f.S; ++i) f.z.push_back(0.2f + 0.3f * i);
+  f.depth = random_floats(R, 0.0f, 1.0f, 181);
+  f.target = random_floats(R, -2.0f, 3.0f, 182);
+  f.valid.assign(R, 1.0f);
+  for (size_t i = 0; i < R; i += 5) f.valid[i] = 0.0f;
+  f.masks = random_floats(f.N * R, 0, 1, 185);
+  for (float& m : f.masks) m = m < 0.3f ? 0.0f : 1.0f;
+  f.behind = 0.5f;  // both sides of the surface
+  return f;
+}
+
+OpEntry free_space_entry() {
+  OpEntry e;
+  e.name = "free_space_loss";
+  e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2];
+    Tensor raw = g.input("raw", Shape{N, R * S, 5}, true), delta = g.input("delta", Shape{N, R, S});
+    Tensor z = g.input("z", Shape{R, S}), depth = g.input("depth", Shape{R}), target = g.input("target", Shape{R});
+    Tensor valid = g.input("valid", Shape{R}), masks = g.input("masks", Shape{N, R});
+    Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks);
+    return OpGraph{{raw, delta, z, depth, target, valid, masks}, {l}, l};
+  };
+  e.values = [](const OpShape& s) {
+    const FreeSpaceCase f = free_space_case(s);
+    return std::vector<std::vector<float>>{f.raw, f.delta, f.z, f.depth, f.target, f.valid, f.masks};
+  };
+  e.check = [](const OpShape& s) {
+    const FreeSpaceCase f = free_space_case(s);
+    const FreeSpaceRun run = run_free_space(f, runtime());
+    expect_close({run.loss}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss");
+    const std::vector<double> fd = free_space_sigma_fd(f, 1e-3f);
+    expect_close(run.d_raw, fd, 1e-5 * max_abs(fd), 1e-3, "d free_space_loss / d raw");
+  };
+  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40; };
+  return e;
+}
+
+}  // namespace
+
+void register_ray_loss_ops(std::vector<OpEntry>& t) {
+  t.push_back(depth_loss_entry());
+  t.push_back(sparsity_loss_entry());
+  t.push_back(distortion_entry());
+  t.push_back(free_space_entry());
+}
+
+}  // namespace nova::test

@@ -1,0 +1,204 @@
+// Every entry of the op table (op_table.hpp) at every shape through the one harness
+// (op_harness.hpp): forward against the float64 reference, gradients against their float64
+// derivative and central differences, on executors that check every op against writes outside
+// its tensors. Then the coverage: every op class the library defines has an entry, and every
+// kernel of every embedded family ran at a size that leaves a partial work-group (the table's
+// odd shapes, and the kernels outside ops in op_table_kernels.cpp) - no exemptions.
+//
+// Shapes and tolerances are stated with each entry. Odd sizes: 1009 rows (a prime, more than
+// any work-group nova chooses, so several groups and a partial last one on every device), odd
+// widths and part counts, and 1-row cases. A kernel launch covers its kernel when, in every
+// dimension, the problem size leaves a partial work-group (or the group is 1 wide there); on
+// a device whose work-groups are all 1 wide, an odd size.
+#include <boost/test/data/monomorphic.hpp>
+#include <boost/test/data/test_case.hpp>
+#include <boost/test/unit_test.hpp>
+
+#include <algorithm>
+#include <iomanip>
+#include <map>
+#include <memory>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "harness.hpp"
+#include "nova/error.hpp"
+#include "nova/executor.hpp"
+#include "nova/kernel_sources.hpp"
+#include "op_harness.hpp"
+#include "op_table.hpp"
+
+using namespace nova;
+using namespace nova::test;
+namespace utf = boost::unit_test;
+namespace bdata = boost::unit_test::data;
+
+namespace {
+
+bool ragged(const LaunchRecord& r) {
+  bool any_wide = false;
+  for (size_t d = 0; d < r.dims; ++d) {
+    if (r.local[d] > 1 && r.size[d] % r.local[d] == 0) return false;
+    any_wide = any_wide || r.local[d] > 1;
+  }
+  return any_wide || r.size[0] % 2 == 1;
+}
+
+struct KernelName {
+  std::string name;
+  std::string extension;  // the `#ifdef cl_khr_...` it is defined under, or empty
+};
+
+// Kernel names of one embedded source: `__kernel void NAME(` with comments removed, each with
+// the extension whose `#ifdef` (up to its #else or #endif) holds it.
+std::vector<KernelName> kernel_names(std::string_view source) {
+  std::string text(source);
+  text = std::regex_replace(text, std::regex(R"(/\*[\s\S]*?\*/)"), " ");
+  text = std::regex_replace(text, std::regex(R"(//[^\n]*)"), " ");
+  std::vector<KernelName> names;
+  const std::regex kernel(R"((?:__kernel|\bkernel)\s+void\s+(\w+)\s*\()");
+  const std::regex ifdef(R"(^\s*#\s*ifdef\s+(cl_\w+))"), close(R"(^\s*#\s*(else|endif|elif))");
+  std::string extension;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (std::regex_search(line, m, ifdef)) extension = m[1];
+    else if (std::regex_search(line, close)) extension.clear();
+    for (std::sregex_iterator it(line.begin(), line.end(), kernel), end; it != end; ++it)
+      names.push_back({(*it)[1], extension});
+  }
+  return names;
+}
+
+bool device_has(const std::string& extension) {
+  if (extension.empty()) return true;
+  if (extension == "cl_khr_int64_base_atomics") return runtime().info().int64_atomics;
+  return false;
+}
+
+// Writes `count` floats of its input's first row (a fill pattern) from the start of its
+// output: count > the output's size is an out-of-bounds kernel.
+class OverrunOp final : public Op {
+ public:
+  explicit OverrunOp(unsigned count) : count_(count) {}
+  std::string type() const override { return "overrun"; }
+  void forward(ExecContext& ctx) override {
+    ctx.launch("packing", "fill_rows").arg(ctx.out(0)).arg(ctx.in(0)).arg(count_).arg(3u).run(count_);
+  }
+  void backward(ExecContext&) override {}
+
+ private:
+  unsigned count_;
+};
+
+}  // namespace
+
+BOOST_FIXTURE_TEST_SUITE(op_table, RecordLaunches)
+
+BOOST_DATA_TEST_CASE(entries, bdata::xrange(nova::test::op_table().size()), index) {
+  const OpEntry& e = nova::test::op_table().at(index);
+  for (const OpShape& s : e.shapes)
+    BOOST_TEST_CONTEXT(e.name << " at " << s.label) { check_entry(e, s); }
+}
+
+// Every concrete op class of the library is built by some entry: a new op without an entry
+// fails here.
+BOOST_AUTO_TEST_CASE(every_op_class_has_an_entry) {
+  const std::set<std::string> library = library_op_classes();
+  BOOST_TEST(library.size() >= 25u, "only " << library.size() << " op classes parsed from host/");
+  BOOST_TEST(library.count("LinearOp") == 1u);
+  std::map<std::string, std::string> entry_of;
+  for (const OpEntry& e : nova::test::op_table())
+    for (const OpShape& s : e.shapes)
+      for (const std::string& c : op_classes_built(e, s)) entry_of.emplace(c, e.name);
+  for (const std::string& c : library)
+    BOOST_TEST(entry_of.count(c) == 1u, "op class " << c << " has no entry in the op table (tests/op_table_*.cpp)");
+  for (const auto& [c, name] : entry_of) BOOST_TEST_MESSAGE(c << ": " << name);
+}
+
+// The guards catch a kernel that writes one float past its output (fill_rows with a count one
+// larger than the tensor), and the same launch within bounds passes.
+BOOST_AUTO_TEST_CASE(guards_catch_an_out_of_bounds_kernel) {
+  for (unsigned count : {15u, 16u}) {
+    Graph g;
+    Tensor fill = g.input("fill", Shape{1, 3});
+    Tensor y = g.activation("y", Shape{5, 3});
+    g.add(std::make_unique<OverrunOp>(count), {fill}, {y});
+    g.keep(y);
+    Executor ex(runtime(), g, guarded_options());
+    ex.set(fill, {1, 2, 3});
+    if (count == 15) {
+      ex.forward();
+      BOOST_TEST(ex.get(y).back() == 3.0f);
+      continue;
+    }
+    try {
+      ex.forward();
+      BOOST_ERROR("a write one float past tensor 'y' went unnoticed");
+    } catch (const Error& err) {
+      const std::string what = err.what();
+      BOOST_TEST(what.find("op 'overrun'") != std::string::npos, what);
+      BOOST_TEST(what.find("past the end of tensor 'y'") != std::string::npos, what);
+    }
+  }
+}
+
+BOOST_AUTO_TEST_CASE(every_kernel_ran_at_an_odd_size,
+                     *utf::depends_on("op_table/entries") * utf::depends_on("op_table/optimiser") *
+                         utf::depends_on("op_table/own_gemm_kernels") *
+                         utf::depends_on("op_table/termination_kernels")) {
+  std::map<std::pair<std::string, std::string>, std::vector<LaunchRecord>> by_kernel;
+  for (const LaunchRecord& r : runtime().launches()) by_kernel[{r.family, r.name}].push_back(r);
+  size_t kernels = 0;
+  for (const KernelSource& src : kernel_sources()) {
+    const std::string family(src.family);
+    if (src.family == kKernelPrelude) continue;  // helpers only, compiled into every family
+    const auto names = kernel_names(src.source);
+    BOOST_TEST(!names.empty(), "no kernel found in kernels/" << family << ".cl");
+    for (const KernelName& k : names) {
+      if (!device_has(k.extension)) {
+        BOOST_TEST_MESSAGE(family << "/" << k.name << ": the device has no " << k.extension);
+        continue;
+      }
+      ++kernels;
+      const auto it = by_kernel.find({family, k.name});
+      const bool launched = it != by_kernel.end();
+      const bool odd = launched && std::any_of(it->second.begin(), it->second.end(), ragged);
+      BOOST_TEST(odd, "kernel " << k.name << " of kernels/" << family << ".cl was "
+                                << (launched ? "launched only at sizes that fill whole work-groups"
+                                             : "never launched")
+                                << " by the op table: add an entry or a shape (tests/op_table_*.cpp)");
+    }
+  }
+  BOOST_TEST(kernels >= 40u, "only " << kernels << " kernels parsed from the embedded sources");
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+// The timing mode: milliseconds and GFLOP/s of one forward + backward (unguarded executors)
+// of every entry at its largest shape, mean of 10 after a warm-up. Not a CTest test (speed is
+// measured, never asserted): `nova_tests --run_test=op_timing --log_level=message`.
+BOOST_AUTO_TEST_SUITE(op_timing, *utf::disabled())
+
+BOOST_AUTO_TEST_CASE(every_entry) {
+  for (const OpEntry& e : nova::test::op_table()) {
+    const OpShape& s = *std::max_element(e.shapes.begin(), e.shapes.end(), [](const OpShape& a, const OpShape& b) {
+      const auto size = [](const OpShape& x) {
+        size_t n = 1;
+        for (size_t d : x.dims) n *= d;
+        return n;
+      };
+      return size(a) < size(b);
+    });
+    const OpTimingResult t = time_entry(e, s, 10);
+    BOOST_TEST(t.seconds > 0);
+    BOOST_TEST_MESSAGE(std::left << std::setw(22) << e.name << std::setw(44) << s.label << std::right
+                                 << std::setw(10) << std::fixed << std::setprecision(3) << t.seconds * 1e3 << " ms "
+                                 << std::setw(8) << std::setprecision(2) << t.flops / t.seconds * 1e-9 << " GFLOP/s");
+  }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
