@@ -7,8 +7,6 @@
 //
 // Exit 0 when the held-out loss falls at least 4-fold, 1 when it does not, 2 for bad input
 // (a bad step count, no OpenCL device). CTest runs it (examples/CMakeLists.txt).
-#include <array>
-#include <cmath>
 #include <cstdlib>
 #include <exception>
 #include <iostream>
@@ -20,26 +18,12 @@
 #include "nova/executor.hpp"
 #include "nova/graph.hpp"
 #include "nova/mlp.hpp"
+#include "nova/mlp_fit.hpp"
 #include "nova/ops.hpp"
 #include "nova/optim.hpp"
 #include "nova/runtime.hpp"
 
 namespace {
-
-// A smooth target in [0, 1]^2 of points in [-1, 1]^3: what a job would read from its data.
-void sample(std::mt19937& rng, size_t n, std::vector<float>& points, std::vector<float>& target) {
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  points.resize(n * 3);
-  target.resize(n * 2);
-  for (size_t i = 0; i < n; ++i) {
-    const float x = u(rng), y = u(rng), z = u(rng);
-    points[i * 3] = x;
-    points[i * 3 + 1] = y;
-    points[i * 3 + 2] = z;
-    target[i * 2] = 0.5f + 0.3f * std::sin(2.0f * x) * std::cos(1.5f * y);
-    target[i * 2 + 1] = 0.5f + 0.25f * std::cos(x + 2.0f * z);
-  }
-}
 
 int parse_steps(int argc, char** argv) {
   if (argc < 2) return 200;
@@ -74,7 +58,7 @@ int main(int argc, char** argv) {
     nova::Adam adam(rt, ex.parameter_floats());
     std::mt19937 rng(1);
     std::vector<float> p, t, eval_p, eval_t;
-    sample(rng, batch, eval_p, eval_t);
+    nova::sample_smooth_function(rng, batch, 2, eval_p, eval_t);  // what a job reads from its data
     const auto held_out_loss = [&] {
       ex.set(points, eval_p);
       ex.set(target, eval_t);
@@ -84,7 +68,7 @@ int main(int argc, char** argv) {
 
     const double before = held_out_loss();
     for (int step = 0; step < steps; ++step) {
-      sample(rng, batch, p, t);
+      nova::sample_smooth_function(rng, batch, 2, p, t);
       ex.set(points, p);
       ex.set(target, t);
       ex.forward();

@@ -16,20 +16,19 @@ std::array<float, 4> smooth_target(float x, float y, float z) {
           0.5f + 0.3f * std::tanh(x - y + 0.5f * z)};
 }
 
-namespace {
-
-void sample(std::mt19937& rng, size_t n, std::vector<float>& points, std::vector<float>& target) {
+void sample_smooth_function(std::mt19937& rng, size_t n, int outputs, std::vector<float>& points,
+                            std::vector<float>& target) {
+  if (outputs < 1 || outputs > 4) throw Error("sample_smooth_function: outputs must be 1 to 4", kExitUsage);
+  const size_t k = static_cast<size_t>(outputs);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   points.resize(n * 3);
-  target.resize(n * 4);
+  target.resize(n * k);
   for (size_t i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) points[i * 3 + d] = u(rng);
     const auto t = smooth_target(points[i * 3], points[i * 3 + 1], points[i * 3 + 2]);
-    for (int d = 0; d < 4; ++d) target[i * 4 + d] = t[d];
+    for (size_t d = 0; d < k; ++d) target[i * k + d] = t[d];
   }
 }
-
-}  // namespace
 
 MlpFitResult fit_smooth_function(Runtime& rt, const MlpFitConfig& config,
                                  const FitProgress& progress) {
@@ -49,7 +48,7 @@ MlpFitResult fit_smooth_function(Runtime& rt, const MlpFitConfig& config,
   std::mt19937 rng(config.seed);
 
   std::vector<float> p, t, eval_p, eval_t;
-  sample(rng, config.batch, eval_p, eval_t);
+  sample_smooth_function(rng, config.batch, 4, eval_p, eval_t);
   const auto evaluate = [&] {
     ex.set(points, eval_p);
     ex.set(target, eval_t);
@@ -66,7 +65,7 @@ MlpFitResult fit_smooth_function(Runtime& rt, const MlpFitConfig& config,
 
   const auto start = std::chrono::steady_clock::now();
   for (int step = 0; step < config.steps; ++step) {
-    sample(rng, config.batch, p, t);
+    sample_smooth_function(rng, config.batch, 4, p, t);
     ex.set(points, p);
     ex.set(target, t);
     ex.forward();

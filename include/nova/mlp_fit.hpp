@@ -4,6 +4,8 @@
 // `nova train-mlp`, the tests and the benchmark.
 #include <array>
 #include <functional>
+#include <random>
+#include <vector>
 
 #include "nova/mlp.hpp"
 #include "nova/runtime.hpp"
@@ -33,6 +35,11 @@ struct MlpFitResult {
 
 // The target: four smooth functions of (x, y, z) in [-1, 1]^3, values in about [0, 1].
 std::array<float, 4> smooth_target(float x, float y, float z);
+
+// n points drawn uniformly in [-1, 1]^3 from rng (x, y, z in turn; n x 3 floats) and the
+// first `outputs` (1-4) components of smooth_target at each (n x outputs floats).
+void sample_smooth_function(std::mt19937& rng, size_t n, int outputs, std::vector<float>& points,
+                            std::vector<float>& target);
 
 using FitProgress = std::function<void(int step, float loss, double seconds)>;
 MlpFitResult fit_smooth_function(Runtime& rt, const MlpFitConfig& config,
