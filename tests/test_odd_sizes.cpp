@@ -57,6 +57,7 @@ const std::map<std::string, std::string> kCoveredElsewhere = {
     {"distortion", "tests/test_distortion_loss_op.cpp (3 NeRFs x 6 rays x 9 samples)"},
     {"hashgrid", "tests/test_hashgrid.cpp (rows 37, 23 and 19)"},
     {"packing", "tests/test_packing.cpp (1009 rows per batch)"},
+    {"rank_moments", "tests/test_rank_sum.cpp (37 + 23 and 29 + 29 rays over two ranks)"},
 };
 
 Runtime& rt() {
