@@ -46,17 +46,15 @@ const std::string kDefaultTerms =
     " --preset quick --log-every 1 --rays 128 --samples 16 --hash-log2-size 12 --hash-levels 8 --augment-start 0";
 const std::string kOptions = kDefaultTerms + " --pretrain-steps 10 --steps 10 --w-depth 0 --w-free-space 0 --w-sparsity 0";
 
+#ifdef NOVA_MPIEXEC
 // `nova ARGS` as two ranks on two PoCL devices (as root too: CI's containers run as root).
 CommandResult two_ranks(const std::string& args, const TempDir& dir) {
-#ifdef NOVA_MPIEXEC
   return run_built("nova", args, dir,
                    "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
                        std::string(NOVA_MPIEXEC) + " -np 2 --oversubscribe -x POCL_DEVICES -x POCL_CACHE_DIR " +
                        "-x POCL_MAX_PTHREAD_COUNT -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM");
-#else
-  return run_built("nova", args, dir);
-#endif
 }
+#endif
 
 }  // namespace
 
