@@ -79,8 +79,10 @@ struct FreeSpaceRun {
 
 // One forward and backward of free_space_loss on the case. With `depth_also_in_mse` the depth
 // also feeds an mse built before the op, so the op is the first writer of the depth's
-// gradient in backward order and must clear it.
-inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool depth_also_in_mse = false) {
+// gradient in backward order and must clear it. With `ranks`, the case is this rank's rays of
+// a batch split over ranks (the fit is the whole batch's).
+inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool depth_also_in_mse = false,
+                                   GradientReducer* ranks = nullptr) {
   Graph g;
   const size_t N = f.N, R = f.R, S = f.S;
   Tensor raw = g.input("raw", Shape{N, R * S, f.C}, true);
@@ -93,7 +95,7 @@ inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool dep
   Tensor zero = g.input("zero", Shape{R});
   Tensor depth_mse = depth_also_in_mse ? mse(depth, zero) : Tensor{};
   Tensor fs = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, f.first,
-                              f.behind);
+                              f.behind, ranks);
   g.keep(fs);
   g.set_loss(depth_also_in_mse ? weighted_sum({depth_mse, fs}, {1.0f, 1.0f}) : fs);
   Executor ex(rt, g, guarded_options());

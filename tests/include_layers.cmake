@@ -27,7 +27,7 @@ set(layers ${core} ${io_modules} cli)
 
 set(owner_camera ops)              # plain data: the camera rays.hpp generates rays of
 set(owner_checkpoint nerf)         # checkpoint_file.cpp: a trained model on disk
-set(owner_distributed train)       # interfaces only: data-parallel training
+set(owner_distributed ops)         # interfaces only: data-parallel training (rank_sum.cpp reads it)
 set(owner_hash_grid ops)           # hash_encoding.cpp
 set(owner_kernel_sources runtime)  # generated at build time
 set(owner_losses ops)              # one op per *_loss*.cpp

@@ -2,6 +2,7 @@
 #include "nova/executor.hpp"
 #include "nova/losses.hpp"
 #include "op_util.hpp"
+#include "rank_moments.hpp"
 
 namespace nova {
 namespace {
@@ -33,7 +34,7 @@ class DepthLossOp final : public Op {
 
 }  // namespace
 
-Tensor depth_loss(Tensor depth, Tensor target, Tensor valid) {
+Tensor depth_loss(Tensor depth, Tensor target, Tensor valid, GradientReducer* ranks) {
   const Shape& s = depth.shape();
   if (s.rank() != 1 || !(target.shape() == s) || !(valid.shape() == s))
     throw Error("depth_loss: depth " + s.str() + ", target " + target.shape().str() +
@@ -41,6 +42,9 @@ Tensor depth_loss(Tensor depth, Tensor target, Tensor valid) {
                 kExitInternal);
   if (target.info().requires_grad || valid.info().requires_grad)
     throw Error("depth_loss: target and valid are data and cannot take a gradient", kExitInternal);
+  // One process keeps its single kernel (and its arithmetic, bit for bit).
+  if (ranks && ranks->size() > 1)
+    return detail::depth_loss_from_moments(detail::batch_moments(depth, target, valid, Tensor{}, *ranks));
   Graph& g = *depth.graph;
   Tensor y = g.activation(depth.info().name + ".depth_loss", Shape{1});
   g.add(std::make_unique<DepthLossOp>(s[0]), {depth, target, valid}, {y});

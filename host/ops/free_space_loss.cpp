@@ -4,16 +4,18 @@
 
 #include "nova/executor.hpp"
 #include "nova/losses.hpp"
+#include "rank_moments.hpp"
 #include "ray_sample_layout.hpp"
 
 namespace nova {
 namespace {
 
-// Inputs: raw, delta, z, depth, target, valid, masks[, noise].
+// Inputs: raw, delta, z, depth, target, valid, masks[, noise][, first, second: the whole
+// batch's moments of the fit (data-parallel training)].
 class FreeSpaceLossOp final : public Op {
  public:
-  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin, float behind)
-      : l_(l), noise_(noise), margin_(margin), behind_(behind) {}
+  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin, float behind, bool moments)
+      : l_(l), noise_(noise), margin_(margin), behind_(behind), moments_(moments) {}
   std::string type() const override { return "free_space_loss"; }
 
   void forward(ExecContext& ctx) override {
@@ -31,6 +33,7 @@ class FreeSpaceLossOp final : public Op {
 
   void backward(ExecContext& ctx) override {
     cl_mem gl = ctx.grad_out(0), g = ctx.grad_in(0);
+    if (moments_) clear_moment_gradients(ctx);
     if (!gl || !g) return;
     // The rendered depth only places the target (a constant): when it carries a gradient for
     // other consumers and this op writes it first, it must be cleared.
@@ -61,21 +64,35 @@ class FreeSpaceLossOp final : public Op {
   // The disparity-to-depth fit of this pass, written after the first `at` floats of the
   // workspace (where the pass's kernel reads it).
   void fit_disparity(ExecContext& ctx, size_t at) const {
+    if (moments_) {
+      ctx.launch("rank_moments", "free_space_fit_from_moments")
+          .arg(ctx.in(moments_at())).arg(ctx.in(moments_at() + 1)).arg(ctx.workspace())
+          .arg(detail::u32(at, "free-space workspace")).run(1);
+      return;
+    }
     ctx.launch("free_space", "free_space_fit")
         .arg(ctx.in(3)).arg(ctx.in(4)).arg(ctx.in(5)).arg(ctx.in(6)).arg(ctx.workspace())
         .arg(detail::u32(at, "free-space workspace")).arg(detail::u32(l_.rays, "rays")).run(1);
   }
 
+  size_t moments_at() const { return noise_ ? 8 : 7; }
+  // The fit is a constant (as the rendered depth): its moments get no gradient from here.
+  void clear_moment_gradients(ExecContext& ctx) const {
+    for (size_t i = moments_at(); i < moments_at() + 2; ++i)
+      if (cl_mem d = ctx.grad_in(i); d && !ctx.accumulate_in(i)) ctx.rt.fill_zero(d, 3 * sizeof(float));
+  }
+
   detail::RaySampleLayout l_;
   bool noise_;
   float margin_, behind_;
+  bool moments_;
 };
 
 }  // namespace
 
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise, float margin,
-                       size_t first_nerf, float behind) {
+                       size_t first_nerf, float behind, GradientReducer* ranks) {
   const auto l = detail::ray_sample_layout("free_space_loss", raw, delta, z, noise, first_nerf);
   const auto bad = [](const std::string& what) { throw Error("free_space_loss: " + what, kExitInternal); };
   for (const Tensor& t : {depth, target, valid})
@@ -92,7 +109,13 @@ Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor 
   Tensor y = g.activation(raw.info().name + ".free_space_loss", Shape{1});
   std::vector<Tensor> inputs = {raw, delta, z, depth, target, valid, masks};
   if (noise.valid()) inputs.push_back(noise);
-  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin, behind), inputs, {y});
+  const bool split = ranks && ranks->size() > 1;
+  if (split) {  // the fit's weights: valid rays of the background (masks row 0)
+    const detail::BatchMoments m = detail::batch_moments(depth, target, valid, masks, *ranks);
+    inputs.push_back(m.first);
+    inputs.push_back(m.second);
+  }
+  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin, behind, split), inputs, {y});
   return y;
 }
 

@@ -21,24 +21,25 @@ void add_depth_inputs(StepGraph& s, const TrainConfig& c) {
 }
 
 // Adds w_depth * depth_loss(depth, -disparity) to `loss` when the scene supports it.
+// With a slice, over the whole batch (its statistics summed over ranks).
 Tensor with_depth_term(StepGraph& s, const TrainConfig& c, const RayGeometry& geo, Tensor depth,
-                       Tensor loss) {
+                       Tensor loss, RaySlice slice) {
   if (!depth_term_active(c, geo)) return loss;
   add_depth_inputs(s, c);
-  Tensor d = depth_loss(depth, s.target_depth, s.depth_valid);
+  Tensor d = depth_loss(depth, s.target_depth, s.depth_valid, slice.ranks);
   s.terms.emplace_back("depth", d);
   return weighted_sum({loss, d}, {1.0f, c.w_depth});
 }
 
 // Adds w_free_space * free_space_loss of the object NeRFs on their masks' rays (joint
-// training, scenes with disparity in NDC).
+// training, scenes with disparity in NDC). With a slice, the disparity fit is the whole batch's.
 Tensor with_free_space_term(StepGraph& s, const TrainConfig& c, const RayGeometry& geo,
-                            Tensor raw, const Samples& smp, Tensor depth, Tensor loss) {
+                            Tensor raw, const Samples& smp, Tensor depth, Tensor loss, RaySlice slice) {
   if (c.w_free_space <= 0.0f || !disparity_usable(geo)) return loss;
   add_depth_inputs(s, c);
   Tensor f = free_space_loss(raw, smp.delta, smp.z, depth, s.target_depth, s.depth_valid,
                              s.target_masks, s.noise, c.free_space_margin, 1,
-                             c.free_space_behind);
+                             c.free_space_behind, slice.ranks);
   s.terms.emplace_back("free_space", f);
   return weighted_sum({loss, f}, {1.0f, c.w_free_space});
 }
@@ -95,7 +96,7 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   Tensor rgb_loss = pretrain_rgb_loss(out.rgb, s->target_rgb);
   s->psnr_mse = rgb_loss;
   s->terms = {{"static_rgb", rgb_loss}};
-  s->loss = with_depth_term(*s, c, geo, out.depth, rgb_loss);
+  s->loss = with_depth_term(*s, c, geo, out.depth, rgb_loss, slice);
   g.set_loss(s->loss);
   for (auto& [name, t] : s->terms) g.keep(t);
   return s;
@@ -136,8 +137,8 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
                          {"sparsity", l.sparsity}, {"order", l.order}})
     if (t.valid()) s->terms.emplace_back(name, t);
   s->loss = with_distortion_term(*s, c, raw, smp, s->target_masks,
-                                 with_depth_term(*s, c, geo, out.depth, l.total));
-  s->loss = with_free_space_term(*s, c, geo, raw, smp, out.depth, s->loss);
+                                 with_depth_term(*s, c, geo, out.depth, l.total, slice));
+  s->loss = with_free_space_term(*s, c, geo, raw, smp, out.depth, s->loss, slice);
   // The progress PSNR is of the composite colour; without its loss term it is measured
   // separately (a forward-only mse nothing back-propagates through).
   s->psnr_mse = l.full_rgb.valid() ? l.full_rgb : mse(out.rgb, s->target_rgb);

@@ -108,11 +108,13 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
 RaySlice Trainer::ray_slice() const {
   if (ranks() == 1) return {};
   const size_t R = static_cast<size_t>(config_.rays);
-  return {R, static_cast<size_t>(reducer_->rank()) * (R / ranks())};
+  return {R, static_cast<size_t>(reducer_->rank()) * (R / ranks()), reducer_};
 }
 
 // The mean over ranks of their gradients: each rank's is of its own rays' mean loss, so the
-// mean is the gradient of the whole step's (for losses that are means over rays).
+// mean is the gradient of the whole step's. A term normalised by a statistic of the whole batch
+// is the same on every rank; its rank_sum ops' backward sums the gradient of the statistic over
+// ranks, so this mean takes each rank's share of it once.
 void Trainer::reduce_gradients() {
   const size_t n = exec_->parameter_floats();
   std::vector<float> g(n);

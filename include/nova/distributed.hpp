@@ -3,8 +3,10 @@
 // the same step (frame, augmentation, all R pixels) from the same generator and trains on its
 // share of the rays, [rank R / N, (rank + 1) R / N), with the device randomness of exactly
 // those rays (random.hpp slices); the gradients are summed through a GradientReducer and
-// divided by N, so every rank's Adam makes the same update. nova_core knows no MPI: `nova
-// train` implements the reducer with MPI when it is built with it.
+// divided by N, so every rank's Adam makes the same update. The terms normalised by a statistic
+// of the batch (depth standardisation, the free-space fit) take it over every rank's rays
+// through rank_sum ops in the step graph. nova_core knows no MPI: `nova train` implements the
+// reducer with MPI when it is built with it.
 #include <cstddef>
 #include <vector>
 
@@ -24,6 +26,8 @@ class GradientReducer {
 struct RaySlice {
   size_t global_rays = 0;  // 0: no slicing (one process)
   size_t first_ray = 0;
+  // The ranks, for the loss terms normalised by a statistic of the whole batch (rank_sum.hpp).
+  GradientReducer* ranks = nullptr;
 };
 
 }  // namespace nova

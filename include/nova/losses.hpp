@@ -1,6 +1,7 @@
 #pragma once
 // The NOVA training losses as graph ops, and the builder that assembles the weighted total.
 // A term whose weight is 0 is not built into the graph at all (no op, no kernel, no memory).
+#include "nova/distributed.hpp"
 #include "nova/graph.hpp"
 #include "nova/render.hpp"
 
@@ -29,7 +30,10 @@ Tensor alpha_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {},
 // (render_composite's), target [R] affine in depth with a positive slope (minus the
 // disparity in NDC), valid [R] in {0, 1}; 0 when fewer than 2 rays are valid. As
 // DynamicNeRF's depth term, it resolves the depth of objects seen from one camera per time.
-Tensor depth_loss(Tensor depth, Tensor target, Tensor valid);
+// With `ranks` of more than one rank (data-parallel training, rank_sum.hpp) the rays are this
+// rank's share and the statistics, hence the loss, are the whole batch's: every rank's value is
+// the loss one process gets on all the rays (to float rounding: the sums run in another order).
+Tensor depth_loss(Tensor depth, Tensor target, Tensor valid, GradientReducer* ranks = nullptr);
 
 // Sparsity loss: sum over object NeRFs n >= 1, rays r, samples i of mask_n(r) alpha_n,i,
 // divided by K*R*S (arguments as alpha_loss). For a given opacity 1 - prod(1 - alpha_i) the
@@ -60,10 +64,12 @@ Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Te
 // `behind` > 0 each sample also costs behind * max(0, z_i - z*_r - margin): weight pushed back
 // along the rays, which the one camera that sees an object at a time cannot tell from the
 // surface, is pulled to the disparity's depth too. raw, delta, z, masks, noise as
-// distortion_loss; depth, target, valid [R] as depth_loss.
+// distortion_loss; depth, target, valid [R] as depth_loss. With `ranks` of more than one rank
+// the fit is the whole batch's, as depth_loss's statistics (the mean over (NeRF, ray) pairs
+// needs nothing more: each rank has the same share of them).
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise = {}, float margin = 0.05f,
-                       size_t first_nerf = 1, float behind = 0.0f);
+                       size_t first_nerf = 1, float behind = 0.0f, GradientReducer* ranks = nullptr);
 
 // Per-NeRF mask loss of the reference code: sum over NeRFs n of the mean over rays r of
 // |mask_n(r) - target_n(r)|. mask [N, R] (render_composite's), target [N, R] (data).

@@ -1,0 +1,247 @@
+// The sum over ranks (rank_sum.hpp) and the batch statistics built on it (kernels/
+// rank_moments.cl), with two ranks as threads summing through the in-process reducer, each
+// with its own runtime on the test device. The ranks hold odd numbers of rays (37 and 23, or
+// 29 each), so this suite also launches every rank_moments kernel at sizes that fill no
+// work-group (tests/test_odd_sizes.cpp counts the family as covered here).
+//
+// A loss split over ranks is checked as the trainer uses it: the objective is the mean over
+// ranks of their losses, and a value of one rank's rays gets that rank's gradient divided by
+// the number of ranks (the trainer sums the gradients over ranks and divides by it).
+#include <boost/test/unit_test.hpp>
+
+#include <cmath>
+
+#include "free_space_reference.hpp"
+#include "harness.hpp"
+#include "nova/executor.hpp"
+#include "nova/losses.hpp"
+#include "nova/ops.hpp"
+#include "nova/rank_sum.hpp"
+#include "thread_reducer.hpp"
+
+using namespace nova;
+using namespace nova::test;
+
+namespace {
+
+void require_no_errors(const std::vector<std::string>& errors) {
+  for (size_t r = 0; r < errors.size(); ++r) BOOST_TEST_REQUIRE(errors[r].empty(), "rank " << r << ": " << errors[r]);
+}
+
+// Float64 depth loss of depth_loss.cl (as test_depth_loss_op.cpp).
+double depth_reference(const std::vector<double>& p, const std::vector<float>& t, const std::vector<float>& w) {
+  double n = 0, sp = 0, st = 0;
+  for (size_t r = 0; r < p.size(); ++r) n += w[r], sp += w[r] * p[r], st += w[r] * t[r];
+  if (n < 2) return 0;
+  const double mp = sp / n, mt = st / n;
+  double vp = 0, vt = 0;
+  for (size_t r = 0; r < p.size(); ++r)
+    vp += w[r] * (p[r] - mp) * (p[r] - mp), vt += w[r] * (t[r] - mt) * (t[r] - mt);
+  const double dp = std::sqrt(vp / n + 1e-6), dt = std::sqrt(vt / n + 1e-6);
+  double sum = 0;
+  for (size_t r = 0; r < p.size(); ++r) {
+    const double e = (p[r] - mp) / dp - (t[r] - mt) / dt;
+    sum += w[r] * e * e;
+  }
+  return sum / n;
+}
+
+template <class T>
+std::vector<T> part(const std::vector<T>& v, size_t first, size_t count) {
+  return std::vector<T>(v.begin() + static_cast<long>(first), v.begin() + static_cast<long>(first + count));
+}
+
+// Rays [first, first + count) of a free-space case.
+FreeSpaceCase slice_case(const FreeSpaceCase& f, size_t first, size_t count) {
+  FreeSpaceCase s = f;
+  s.R = count;
+  s.raw.clear(), s.delta.clear(), s.masks.clear(), s.noise.clear();
+  for (size_t n = 0; n < f.N; ++n) {
+    const size_t row = n * f.R + first;
+    s.raw.insert(s.raw.end(), f.raw.begin() + static_cast<long>(row * f.S * f.C),
+                 f.raw.begin() + static_cast<long>((row + count) * f.S * f.C));
+    s.delta.insert(s.delta.end(), f.delta.begin() + static_cast<long>(row * f.S),
+                   f.delta.begin() + static_cast<long>((row + count) * f.S));
+    s.masks.insert(s.masks.end(), f.masks.begin() + static_cast<long>(row), f.masks.begin() + static_cast<long>(row + count));
+    if (!f.noise.empty())
+      s.noise.insert(s.noise.end(), f.noise.begin() + static_cast<long>(row * f.S),
+                     f.noise.begin() + static_cast<long>((row + count) * f.S));
+  }
+  s.z = part(f.z, first * f.S, count * f.S);
+  s.depth = part(f.depth, first, count);
+  s.target = part(f.target, first, count);
+  s.valid = part(f.valid, first, count);
+  return s;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(rank_sum)
+
+// Forward: every rank gets the float64 sum (two floats: exact to one rounding, rtol 1e-7).
+// Backward: each rank's loss is mse(y, its own target), so dx = sum over ranks of 2 (y - t_k) / n,
+// likewise to float rounding of a few operations (rtol 1e-6).
+BOOST_AUTO_TEST_CASE(forward_and_adjoint_are_sums_over_ranks) {
+  const size_t n = 7;
+  std::vector<std::vector<float>> x = {random_floats(n, -1, 1, 1), random_floats(n, -1, 1, 2)};
+  std::vector<std::vector<float>> target = {random_floats(n, -1, 1, 3), random_floats(n, -1, 1, 4)};
+  std::vector<std::vector<float>> y(2), dx(2);
+  require_no_errors(run_ranks(2, [&](int r, GradientReducer& ranks) {
+    const size_t k = static_cast<size_t>(r);
+    Runtime rt(test::runtime().info(), false);
+    Graph g;
+    Tensor tx = g.input("x", Shape{n}, true), tt = g.input("target", Shape{n});
+    Tensor ty = nova::rank_sum(tx, ranks);
+    g.keep(ty);
+    g.set_loss(mse(ty, tt));
+    Executor ex(rt, g);
+    ex.set(tx, x[k]);
+    ex.set(tt, target[k]);
+    ex.forward();
+    ex.backward();
+    y[k] = ex.get(ty);
+    dx[k] = ex.get_grad(tx);
+  }));
+  std::vector<double> y_ref(n), dx_ref(n, 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    y_ref[i] = double(x[0][i]) + x[1][i];
+    for (size_t k = 0; k < 2; ++k) dx_ref[i] += 2.0 * (y_ref[i] - target[k][i]) / n;
+  }
+  BOOST_TEST((y[0] == y[1]));  // the same bits on every rank
+  BOOST_TEST((dx[0] == dx[1]));
+  expect_close(y[0], y_ref, 0, 1e-7, "rank_sum forward");
+  expect_close(dx[0], dx_ref, 1e-7, 1e-6, "rank_sum backward");
+}
+
+// The depth loss of 37 + 23 rays on two ranks against the float64 loss of all 60 (rtol 1e-4
+// as test_depth_loss_op: float32 sums, here from moments, ~1e-6 relative) and against one
+// process's single kernel on them; its gradient against the float64 reference's central
+// differences (h = 1e-6, exact to ~1e-9; rtol 1e-3 and atol 1e-4 of the gradient's scale as
+// odd_sizes' check of the single kernel, for the standardisation's cancellations) and against
+// central differences of the split device forward itself (float32: h = 1e-2, the harness'
+// 2e-2 of the gradient's scale).
+BOOST_AUTO_TEST_CASE(depth_loss_over_ranks_is_the_whole_batchs) {
+  const size_t R = 60;
+  const size_t share[2] = {37, 23}, first[2] = {0, 37};
+  const auto p = random_floats(R, 0.0f, 1.0f, 11), t = random_floats(R, -2.0f, 3.0f, 12);
+  std::vector<float> w(R, 1.0f);
+  for (size_t i = 0; i < R; i += 5) w[i] = 0.0f;
+  const std::vector<size_t> probes = {1, 7, 36, 38, 59};  // rays of both ranks for the device differences
+  const float h = 1e-2f;
+  std::vector<float> loss(2), grad(R);
+  std::vector<std::vector<float>> fd_loss(2);  // per probe: loss at +h, then at -h
+  require_no_errors(run_ranks(2, [&](int r, GradientReducer& ranks) {
+    const size_t k = static_cast<size_t>(r), a = first[k], m = share[k];
+    Runtime rt(test::runtime().info(), false);
+    Graph g;
+    Tensor tp = g.input("depth", Shape{m}, true), tt = g.input("target", Shape{m}), tw = g.input("valid", Shape{m});
+    g.set_loss(depth_loss(tp, tt, tw, &ranks));
+    Executor ex(rt, g);
+    auto mine = part(p, a, m);
+    ex.set(tp, mine);
+    ex.set(tt, part(t, a, m));
+    ex.set(tw, part(w, a, m));
+    ex.forward();
+    ex.backward();
+    loss[k] = ex.loss();
+    const auto d = ex.get_grad(tp);
+    for (size_t i = 0; i < m; ++i) grad[a + i] = d[i] / 2.0f;  // the trainer's mean over ranks
+    // Every rank runs every probe's forwards (each a collective); the owner moves its ray.
+    for (size_t q : probes)
+      for (float s : {h, -h}) {
+        auto moved = mine;
+        if (q >= a && q < a + m) moved[q - a] += s;
+        ex.set(tp, moved);
+        ex.forward();
+        fd_loss[k].push_back(ex.loss());
+      }
+  }));
+  BOOST_TEST(loss[0] == loss[1]);  // every rank has the whole batch's loss
+  const std::vector<double> pd = to_double(p);
+  expect_close({loss[0]}, {depth_reference(pd, t, w)}, 0, 1e-4, "depth_loss over two ranks");
+
+  Graph g;
+  Tensor tp = g.input("depth", Shape{R}, true), tt = g.input("target", Shape{R}), tw = g.input("valid", Shape{R});
+  g.set_loss(depth_loss(tp, tt, tw));
+  Executor ex(test::runtime(), g);
+  ex.set(tp, p);
+  ex.set(tt, t);
+  ex.set(tw, w);
+  ex.forward();
+  ex.backward();
+  BOOST_TEST(loss[0] == ex.loss(), boost::test_tools::tolerance(1e-5f));
+  const std::vector<float> one = ex.get_grad(tp);
+
+  std::vector<double> fd(R), x = pd;
+  for (size_t r = 0; r < R; ++r) {
+    const double x0 = x[r], e = 1e-6;
+    x[r] = x0 + e;
+    const double lp = depth_reference(x, t, w);
+    x[r] = x0 - e;
+    const double lm = depth_reference(x, t, w);
+    x[r] = x0;
+    fd[r] = (lp - lm) / (2 * e);
+  }
+  double scale = 0;
+  for (double v : fd) scale = std::max(scale, std::fabs(v));
+  expect_close(grad, fd, 1e-4 * scale, 1e-3, "d depth_loss / d depth over two ranks");
+  expect_close(grad, to_double(one), 1e-4 * scale, 1e-3, "against one process");
+  for (size_t i = 0; i < probes.size(); ++i) {
+    // The objective is the mean over ranks of the losses (both equal here).
+    const double d = (double(fd_loss[0][2 * i]) - fd_loss[0][2 * i + 1]) / (2.0 * h);
+    BOOST_TEST(std::fabs(d - grad[probes[i]]) <= 2e-2 * (scale + 1e-6),
+               "ray " << probes[i] << ": device difference " << d << ", gradient " << grad[probes[i]]);
+  }
+}
+
+// The free-space loss of 2 NeRFs x (29 + 29) rays x 5 samples on two ranks: the mean over ranks
+// of their losses against the float64 loss of the whole batch (one fit over all 58 rays; rtol
+// 1e-4 as test_free_space_loss_op), and d raw (halved, the trainer's mean) against one process's
+// (the same per-ray kernel with a fit from other float sums: rtol 1e-4, atol 1e-6 of the scale).
+// The depth gets no gradient from this loss, also through the fit's moments.
+BOOST_AUTO_TEST_CASE(free_space_fit_over_ranks_is_the_whole_batchs) {
+  FreeSpaceCase f;
+  f.N = 2, f.R = 58, f.S = 5;
+  const size_t E = f.N * f.R * f.S;
+  f.raw = random_floats(E * f.C, -1, 1, 21);
+  const auto sig = random_floats(E, 0.3f, 4.0f, 22);
+  for (size_t e = 0; e < E; ++e) f.raw[e * f.C + 3] = sig[e];
+  f.delta = random_floats(E, 0.02f, 0.2f, 23);
+  for (size_t r = 0; r < f.R; ++r)
+    for (size_t i = 0; i < f.S; ++i) f.z.push_back((i + 0.5f) / f.S);
+  f.depth = random_floats(f.R, 0.2f, 0.9f, 24);
+  f.target = random_floats(f.R, -3.0f, -0.5f, 25);
+  f.valid.assign(f.R, 1.0f);
+  for (size_t r = 0; r < f.R; r += 6) f.valid[r] = 0.0f;
+  f.masks = random_floats(f.N * f.R, 0, 1, 26);
+  for (float& m : f.masks) m = m < 0.4f ? 0.0f : 1.0f;
+  f.noise = random_floats(E, -0.1f, 0.1f, 27);
+
+  const size_t half = f.R / 2;
+  std::vector<FreeSpaceRun> runs(2);
+  require_no_errors(run_ranks(2, [&](int r, GradientReducer& ranks) {
+    const size_t k = static_cast<size_t>(r);
+    Runtime rt(test::runtime().info(), false);
+    runs[k] = run_free_space(slice_case(f, k * half, half), rt, true, &ranks);
+  }));
+  const double whole = free_space_reference(f, f.raw);
+  expect_close({static_cast<float>((double(runs[0].loss) + runs[1].loss) / 2)}, {whole}, 0, 1e-4,
+               "free_space_loss over two ranks");
+  const FreeSpaceRun one = run_free_space(f, test::runtime(), true);
+  std::vector<float> d_raw(f.raw.size());
+  for (size_t k = 0; k < 2; ++k) {
+    const FreeSpaceCase s = slice_case(f, k * half, half);
+    for (size_t n = 0; n < f.N; ++n)
+      for (size_t i = 0; i < half * f.S * f.C; ++i)
+        d_raw[((n * f.R + k * half) * f.S) * f.C + i] = runs[k].d_raw[(n * half * f.S) * f.C + i] / 2.0f;
+    // The depth feeds only the mse (d = 2 depth / R) besides the fit, which adds nothing.
+    for (size_t i = 0; i < half; ++i)
+      BOOST_TEST(runs[k].d_depth[i] == 2.0f * s.depth[i] / static_cast<float>(half),
+                 boost::test_tools::tolerance(1e-6f));
+  }
+  double scale = 0;
+  for (float v : one.d_raw) scale = std::max(scale, double(std::fabs(v)));
+  expect_close(d_raw, to_double(one.d_raw), 1e-6 * scale, 1e-4, "d free_space_loss / d raw over two ranks");
+}
+
+BOOST_AUTO_TEST_SUITE_END()
