@@ -3,6 +3,7 @@
 // return.
 #include "cli/mpi_job.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -29,10 +30,12 @@ int env_int(const char* name, int fallback) {
   return v && *v ? std::atoi(v) : fallback;
 }
 
-// The launcher's world size, from the environment (0: not launched by one).
+// The launcher's world size, from the environment (0: not launched by one). Slurm's PMIx
+// plugin gives a rank but no size; the step's task count is the size then.
 int launched_size() {
   for (const char* k : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
     if (const int n = env_int(k, 0); n > 0) return n;
+  if (std::getenv("PMIX_RANK") || std::getenv("PMI_RANK")) return std::max(1, env_int("SLURM_STEP_NUM_TASKS", 1));
   return 0;
 }
 
@@ -138,6 +141,13 @@ class Mpi final : public MpiJob {
     MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
     MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    // A launcher whose PMI this MPI does not speak leaves every process a world of its own.
+    if (const int launched = launched_size(); size_ != launched) {
+      MPI_Finalize();
+      throw Error("launched as one of " + std::to_string(launched) + " ranks, but MPI sees " + std::to_string(size_) +
+                  " (each would train alone into the same folder): start the ranks with mpirun, or with srun "
+                  "--mpi=PLUGIN where Slurm and this MPI share a PMI");
+    }
     watchdog_ = std::make_unique<Watchdog>(rank_);
     reducer_ = std::make_unique<MpiReducer>(rank_, size_, *watchdog_);
   }
