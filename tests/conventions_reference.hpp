@@ -1,5 +1,5 @@
 #pragma once
-// Float64 references of the reference code's loss terms (LossConventions in losses.hpp),
+// Float64 references of the reference code's loss terms (LossConventions in novel_view_loss.hpp),
 // written from the public reference code's losses.py, and their derivatives.
 #include <algorithm>
 #include <cmath>

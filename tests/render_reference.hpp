@@ -1,6 +1,6 @@
 #pragma once
 // Float64 host reference of the compositing renderer, written straight from the formulas
-// (DESIGN.md, "Compositing") and independent of kernels/render.cl: no union-of-probabilities
+// (as include/nova/render.hpp states them) and independent of kernels/render.cl: no union-of-probabilities
 // trick, no reverse scan; gradients come from central differences of this function.
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The reference code's loss conventions (LossConventions, losses.hpp), item by item: each
+// The reference code's loss conventions (LossConventions, novel_view_loss.hpp), item by item: each
 // against a float64 host reference written from the public reference code's formula, with
 // a finite-difference check of every changed differentiable op, and the presets selecting
 // them (quick: nova's own, reference: the reference code's).
@@ -11,6 +11,7 @@
 #include "conventions_reference.hpp"
 #include "loss_reference.hpp"
 #include "nova/losses.hpp"
+#include "nova/novel_view_loss.hpp"
 #include "nova/nova_graphs.hpp"
 #include "nova/ops.hpp"
 #include "nova/render.hpp"

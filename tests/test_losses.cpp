@@ -8,6 +8,7 @@
 #include "harness.hpp"
 #include "loss_reference.hpp"
 #include "nova/losses.hpp"
+#include "nova/novel_view_loss.hpp"
 #include "nova/ops.hpp"
 #include "nova/render.hpp"
 

@@ -1,5 +1,5 @@
 // The novel-view loss terms as the public reference code normalises them (kernels/refloss.cl,
-// LossConventions in losses.hpp): per-NeRF L1 mask loss, per-NeRF masked RGB over the mask
+// LossConventions in novel_view_loss.hpp): per-NeRF L1 mask loss, per-NeRF masked RGB over the mask
 // area, alpha loss over the rays outside each object's mask, and the order loss. Each forward
 // is a deterministic two-stage sum; each backward recomputes the sums it divides by and is
 // then elementwise.

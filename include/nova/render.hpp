@@ -26,7 +26,7 @@ struct RenderOptions {
   // Inference only: the static blend is set to 0 wherever an object blend exceeds 0.5.
   bool hard_blend = false;
   // b_n = blend_n / (sum_m blend_m + blend_eps): nova's 1e-6 by default, the reference code's
-  // 1e-8 under its conventions (LossConventions in losses.hpp).
+  // 1e-8 under its conventions (LossConventions in novel_view_loss.hpp).
   float blend_eps = 1e-6f;
   // alpha_full_i in mask, depth and acc: 1 - prod_n (1 - alpha_n b_n) (false, the union of
   // the NeRFs' opacities) or sum_n alpha_n b_n (true, the reference code's weights_full).

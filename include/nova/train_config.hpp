@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "nova/losses.hpp"
+#include "nova/novel_view_loss.hpp"
 #include "nova/model_config.hpp"
 #include "nova/optim.hpp"
 

@@ -1,6 +1,6 @@
 // Assembles the weighted NOVA loss from its terms; a zero weight leaves its term out of the
 // graph entirely, so it costs nothing and cannot produce a gradient.
-#include "nova/losses.hpp"
+#include "nova/novel_view_loss.hpp"
 #include "nova/ops.hpp"
 #include "nova/error.hpp"
 
