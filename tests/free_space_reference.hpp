@@ -19,6 +19,27 @@ struct FreeSpaceCase {
   bool per_nerf_delta = true;
 };
 
+// The op table's case (op_table_ray_losses.cpp, op_table_ranks.cpp): N NeRFs x R rays x S
+// samples with sigma in [0.3, 3.3], every fifth ray invalid, 30% of the masks 0, weight behind
+// the surface too (behind 0.5).
+inline FreeSpaceCase free_space_table_case(size_t N, size_t R, size_t S) {
+  FreeSpaceCase f;
+  f.N = N, f.R = R, f.S = S;
+  f.raw = random_floats(f.N * R * f.S * f.C, -1, 1, 183);
+  for (size_t e = 0; e < f.N * R * f.S; ++e) f.raw[e * f.C + 3] = 0.3f + std::fabs(f.raw[e * f.C + 3]) * 3;
+  f.delta = random_floats(f.N * R * f.S, 0.1f, 0.4f, 184);
+  for (size_t r = 0; r < R; ++r)
+    for (size_t i = 0; i < f.S; ++i) f.z.push_back(0.2f + 0.3f * i);
+  f.depth = random_floats(R, 0.0f, 1.0f, 181);
+  f.target = random_floats(R, -2.0f, 3.0f, 182);
+  f.valid.assign(R, 1.0f);
+  for (size_t i = 0; i < R; i += 5) f.valid[i] = 0.0f;
+  f.masks = random_floats(f.N * R, 0, 1, 185);
+  for (float& m : f.masks) m = m < 0.3f ? 0.0f : 1.0f;
+  f.behind = 0.5f;  // both sides of the surface
+  return f;
+}
+
 inline double free_space_reference(const FreeSpaceCase& f, const std::vector<float>& raw) {
   // Least-squares fit depth ~ a + b target over the valid background rays (masks row 0).
   double n = 0, sp = 0, st = 0;

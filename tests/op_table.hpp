@@ -91,6 +91,7 @@ void register_loss_ops(std::vector<OpEntry>& table);
 void register_ray_loss_ops(std::vector<OpEntry>& table);
 void register_render_ops(std::vector<OpEntry>& table);
 void register_grid_ops(std::vector<OpEntry>& table);
+void register_rank_ops(std::vector<OpEntry>& table);
 
 // The row count of the odd-size sweep: a prime, more than any work-group nova chooses, so
 // several groups and a partial last one on every device.

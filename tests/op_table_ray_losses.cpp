@@ -153,24 +153,7 @@ OpEntry distortion_entry() {
 // free_space_loss: 2 NeRFs x 1009 rays x 3 samples against the float64 reference and its
 // central differences (tests/test_free_space_loss_op.cpp states the tolerances: the loss
 // rtol 1e-4, its gradient rtol 1e-3 with atol 1e-5 of the gradient's scale).
-FreeSpaceCase free_space_case(const OpShape& s) {
-  FreeSpaceCase f;
-  f.N = s.dims[0], f.R = s.dims[1], f.S = s.dims[2];
-  const size_t R = f.R;
-  f.raw = random_floats(f.N * R * f.S * f.C, -1, 1, 183);
-  for (size_t e = 0; e < f.N * R * f.S; ++e) f.raw[e * f.C + 3] = 0.3f + std::fabs(f.raw[e * f.C + 3]) * 3;
-  f.delta = random_floats(f.N * R * f.S, 0.1f, 0.4f, 184);
-  for (size_t r = 0; r < R; ++r)
-    for (size_t i = 0; i < f.S; ++i) f.z.push_back(0.2f + 0.3f * i);
-  f.depth = random_floats(R, 0.0f, 1.0f, 181);
-  f.target = random_floats(R, -2.0f, 3.0f, 182);
-  f.valid.assign(R, 1.0f);
-  for (size_t i = 0; i < R; i += 5) f.valid[i] = 0.0f;
-  f.masks = random_floats(f.N * R, 0, 1, 185);
-  for (float& m : f.masks) m = m < 0.3f ? 0.0f : 1.0f;
-  f.behind = 0.5f;  // both sides of the surface
-  return f;
-}
+FreeSpaceCase free_space_case(const OpShape& s) { return free_space_table_case(s.dims[0], s.dims[1], s.dims[2]); }
 
 OpEntry free_space_entry() {
   OpEntry e;

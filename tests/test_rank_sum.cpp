@@ -1,8 +1,9 @@
 // The sum over ranks (rank_sum.hpp) and the batch statistics built on it (kernels/
 // rank_moments.cl), with two ranks as threads summing through the in-process reducer, each
 // with its own runtime on the test device. The ranks hold odd numbers of rays (37 and 23, or
-// 29 each), so this suite also launches every rank_moments kernel at sizes that fill no
-// work-group (tests/test_odd_sizes.cpp counts the family as covered here).
+// 29 each). The op table runs the same ops in one process with two ranks of identical rays
+// (twin_ranks_reducer.hpp, tests/op_table_ranks.cpp); the last case here checks that stand-in
+// gives the bits of two such ranks as threads.
 //
 // A loss split over ranks is checked as the trainer uses it: the objective is the mean over
 // ranks of their losses, and a value of one rank's rays gets that rank's gradient divided by
@@ -18,6 +19,7 @@
 #include "nova/ops.hpp"
 #include "nova/rank_sum.hpp"
 #include "thread_reducer.hpp"
+#include "twin_ranks_reducer.hpp"
 
 using namespace nova;
 using namespace nova::test;
@@ -117,7 +119,7 @@ BOOST_AUTO_TEST_CASE(forward_and_adjoint_are_sums_over_ranks) {
 // as test_depth_loss_op: float32 sums, here from moments, ~1e-6 relative) and against one
 // process's single kernel on them; its gradient against the float64 reference's central
 // differences (h = 1e-6, exact to ~1e-9; rtol 1e-3 and atol 1e-4 of the gradient's scale as
-// odd_sizes' check of the single kernel, for the standardisation's cancellations) and against
+// the op table's entry of the single kernel, for the standardisation's cancellations) and against
 // central differences of the split device forward itself (float32: h = 1e-2, the harness'
 // 2e-2 of the gradient's scale).
 BOOST_AUTO_TEST_CASE(depth_loss_over_ranks_is_the_whole_batchs) {
@@ -242,6 +244,50 @@ BOOST_AUTO_TEST_CASE(free_space_fit_over_ranks_is_the_whole_batchs) {
   double scale = 0;
   for (float v : one.d_raw) scale = std::max(scale, double(std::fabs(v)));
   expect_close(d_raw, to_double(one.d_raw), 1e-6 * scale, 1e-4, "d free_space_loss / d raw over two ranks");
+}
+
+
+// The op table's stand-in for a second rank (twin_ranks_reducer.hpp) against two ranks as
+// threads holding the same rays: the same bits (a sum of two equal floats is exact either
+// way) for the depth loss of 37 rays and the free-space loss of 2 NeRFs x 23 rays x 3, their
+// gradients included.
+BOOST_AUTO_TEST_CASE(twin_ranks_are_two_ranks_with_the_same_rays) {
+  const size_t R = 37;
+  const auto p = random_floats(R, 0.0f, 1.0f, 31), t = random_floats(R, -2.0f, 3.0f, 32);
+  std::vector<float> w(R, 1.0f);
+  for (size_t i = 0; i < R; i += 5) w[i] = 0.0f;
+  const FreeSpaceCase f = free_space_table_case(2, 23, 3);
+  const auto depth_run = [&](Runtime& rt, GradientReducer& ranks) {
+    Graph g;
+    Tensor tp = g.input("depth", Shape{R}, true), tt = g.input("target", Shape{R}), tw = g.input("valid", Shape{R});
+    g.set_loss(depth_loss(tp, tt, tw, &ranks));
+    Executor ex(rt, g);
+    ex.set(tp, p);
+    ex.set(tt, t);
+    ex.set(tw, w);
+    ex.forward();
+    ex.backward();
+    std::vector<float> out = ex.get_grad(tp);
+    out.push_back(ex.loss());
+    return out;
+  };
+  std::vector<std::vector<float>> depth(2);
+  std::vector<FreeSpaceRun> free_space(2);
+  require_no_errors(run_ranks(2, [&](int r, GradientReducer& ranks) {
+    const size_t k = static_cast<size_t>(r);
+    Runtime rt(test::runtime().info(), false);
+    depth[k] = depth_run(rt, ranks);
+    free_space[k] = run_free_space(f, rt, true, &ranks);
+  }));
+  TwinRanksReducer twin;
+  const std::vector<float> depth_twin = depth_run(test::runtime(), twin);
+  const FreeSpaceRun free_space_twin = run_free_space(f, test::runtime(), true, &twin);
+  for (size_t k = 0; k < 2; ++k) {
+    BOOST_TEST((depth[k] == depth_twin), "depth_loss: rank " << k);
+    BOOST_TEST(free_space[k].loss == free_space_twin.loss, "free_space_loss: rank " << k);
+    BOOST_TEST((free_space[k].d_raw == free_space_twin.d_raw), "d free_space_loss / d raw: rank " << k);
+    BOOST_TEST((free_space[k].d_depth == free_space_twin.d_depth), "d depth: rank " << k);
+  }
 }
 
 BOOST_AUTO_TEST_SUITE_END()
