@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "free_space_reference.hpp"
 #include "harness.hpp"
+#include "nova/distributed.hpp"
 #include "nova/graph.hpp"
 
 namespace nova::test {
@@ -91,6 +93,17 @@ void register_loss_ops(std::vector<OpEntry>& table);
 void register_ray_loss_ops(std::vector<OpEntry>& table);
 void register_render_ops(std::vector<OpEntry>& table);
 void register_grid_ops(std::vector<OpEntry>& table);
+
+// The depth loss entry (op_table_ray_losses.cpp); with `ranks`, built through the moments
+// summed over ranks (op_table_ranks.cpp uses it with twin ranks).
+OpEntry depth_loss_entry(GradientReducer* ranks = nullptr);
+
+// The free-space loss problems (op_table_ray_losses.cpp): dims N NeRFs, R rays, S samples;
+// the case of free_space_table_case, its values in the graph's input order, and the graph
+// (margin 0.05 from the first object NeRF; `behind` and `ranks` as free_space_loss takes them).
+FreeSpaceCase free_space_case(const OpShape& s);
+std::vector<std::vector<float>> free_space_values(const OpShape& s);
+OpGraph free_space_graph(Graph& g, const OpShape& s, float behind, GradientReducer* ranks);
 void register_rank_ops(std::vector<OpEntry>& table);
 
 // The row count of the odd-size sweep: a prime, more than any work-group nova chooses, so

@@ -57,46 +57,8 @@ OpEntry rank_sum_entry() {
 // and their backward kernels) against the single-process float64 depth loss of the same rays.
 // Every fifth ray invalid; 2 rays leave one valid ray: no statistic, loss and gradient 0.
 OpEntry depth_from_moments_entry() {
-  OpEntry e;
-  e.name = "depth_loss_over_ranks";
-  e.shapes = {{{kOddRows}, 0, "1009 rays"}, {{57}, 0, "57 rays"}, {{7}, 0, "7 rays"},
-              {{2}, 0, "2 rays, 1 valid"}};
-  e.build = [](Graph& g, const OpShape& s) {
-    const Shape sh{s.dims[0]};
-    Tensor p = g.input("depth", sh, true), t = g.input("target", sh), w = g.input("valid", sh);
-    Tensor l = depth_loss(p, t, w, &twin_ranks());
-    return OpGraph{{p, t, w}, {l}, l};
-  };
-  e.values = [](const OpShape& s) {
-    std::vector<float> w(s.dims[0], 1.0f);
-    for (size_t i = 0; i < w.size(); i += 5) w[i] = 0.0f;
-    return std::vector<std::vector<float>>{random_floats(s.dims[0], 0.0f, 1.0f, 181),
-                                           random_floats(s.dims[0], -2.0f, 3.0f, 182), w};
-  };
-  // Float32 sums of the rays' moments in one work-item (a relative error of a few 1e-6 at
-  // 1009 rays), and a loss near 2 for uncorrelated depths (no cancellation): rtol 1e-4 as the
-  // single kernel's entry.
-  e.reference = [](const OpCase& c) {
-    return std::vector<Expected>{{{ref_depth_loss(to_double(c.values[0]), c.values[1], c.values[2])}, {0, 1e-4}}};
-  };
-  // Central differences of the float64 loss (h = 1e-6, exact to ~1e-9); the standardisation's
-  // cancellations: rtol 1e-3 and atol 1e-4 of the gradient's scale (the single kernel's entry).
-  e.gradient = [](const OpCase& c) {
-    std::vector<double> d = to_double(c.values[0]), fd(d.size());
-    for (size_t r = 0; r < d.size(); ++r) {
-      const double x0 = d[r], h = 1e-6;
-      d[r] = x0 + h;
-      const double lp = ref_depth_loss(d, c.values[1], c.values[2]);
-      d[r] = x0 - h;
-      const double lm = ref_depth_loss(d, c.values[1], c.values[2]);
-      d[r] = x0;
-      fd[r] = (lp - lm) / (2 * h);
-    }
-    return std::vector<Expected>{{fd, {1e-4 * max_abs(fd), 1e-3}}, {}, {}};
-  };
-  e.fd = GradCheckOptions{};
-  // Two passes of ~6 operations a ray forward and ~10 backward; the scalar kernels are O(1).
-  e.flops = [](const OpShape& s) { return double(s.dims[0]) * 32; };
+  OpEntry e = depth_loss_entry(&twin_ranks());
+  e.shapes = {{{kOddRows}, 0, "1009 rays"}, {{57}, 0, "57 rays"}, {{7}, 0, "7 rays"}, {{2}, 0, "2 rays, 1 valid"}};
   return e;
 }
 
@@ -106,24 +68,12 @@ OpEntry depth_from_moments_entry() {
 // differences in sigma (rtol 1e-3, atol 1e-5 of the gradient's scale) as that entry. The
 // depth also feeds an mse, so the moments' backward runs: the fit adds no gradient, leaving
 // the mse's 2 depth / R (float32 of two roundings: rtol 1e-6).
-FreeSpaceCase free_space_case(const OpShape& s) { return free_space_table_case(s.dims[0], s.dims[1], s.dims[2]); }
-
 OpEntry free_space_over_ranks_entry() {
   OpEntry e;
   e.name = "free_space_loss_over_ranks";
   e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}, {{2, 9, 3}, 0, "2 NeRFs x 9 rays x 3"}};
-  e.build = [](Graph& g, const OpShape& s) {
-    const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2];
-    Tensor raw = g.input("raw", Shape{N, R * S, 5}, true), delta = g.input("delta", Shape{N, R, S});
-    Tensor z = g.input("z", Shape{R, S}), depth = g.input("depth", Shape{R}), target = g.input("target", Shape{R});
-    Tensor valid = g.input("valid", Shape{R}), masks = g.input("masks", Shape{N, R});
-    Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks, {}, 0.05f, 1, 0.5f, &twin_ranks());
-    return OpGraph{{raw, delta, z, depth, target, valid, masks}, {l}, l};
-  };
-  e.values = [](const OpShape& s) {
-    const FreeSpaceCase f = free_space_case(s);
-    return std::vector<std::vector<float>>{f.raw, f.delta, f.z, f.depth, f.target, f.valid, f.masks};
-  };
+  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, 0.5f, &twin_ranks()); };
+  e.values = free_space_values;
   e.check = [](const OpShape& s) {
     const FreeSpaceCase f = free_space_case(s);
     const FreeSpaceRun run = run_free_space(f, runtime(), true, &twin_ranks());

@@ -16,53 +16,6 @@ namespace nova::test {
 
 namespace {
 
-// depth_loss: every fifth ray invalid; its float64 definition (loss_reference.hpp) and the
-// central differences of it (h = 1e-6, exact to ~1e-9).
-double depth_reference(const std::vector<double>& d, const std::vector<float>& t, const std::vector<float>& w) {
-  return ref_depth_loss(d, t, w);
-}
-
-OpEntry depth_loss_entry() {
-  OpEntry e;
-  e.name = "depth_loss";
-  // The central differences of the device forward (harness default: the loss is smooth away
-  // from zero variance, and the random depths keep the variance O(0.1)) up to 64 rays.
-  e.shapes = {{{kOddRows}, 0, "1009 rays"}, {{57}, 0, "57 rays"}, {{23}, 0, "23 rays"}, {{7}, 0, "7 rays"}};
-  e.build = [](Graph& g, const OpShape& s) {
-    const Shape sh{s.dims[0]};
-    Tensor p = g.input("depth", sh, true), t = g.input("target", sh), w = g.input("valid", sh);
-    Tensor l = depth_loss(p, t, w);
-    return OpGraph{{p, t, w}, {l}, l};
-  };
-  e.values = [](const OpShape& s) {
-    std::vector<float> w(s.dims[0], 1.0f);
-    for (size_t i = 0; i < w.size(); i += 5) w[i] = 0.0f;
-    return std::vector<std::vector<float>>{random_floats(s.dims[0], 0.0f, 1.0f, 181), random_floats(s.dims[0], -2.0f, 3.0f, 182), w};
-  };
-  // The loss is a float32 sum over the rays: rtol 1e-4 (test_depth_loss_op).
-  e.reference = [](const OpCase& c) {
-    return std::vector<Expected>{{{depth_reference(to_double(c.values[0]), c.values[1], c.values[2])}, {0, 1e-4}}};
-  };
-  e.gradient = [](const OpCase& c) {
-    std::vector<double> d = to_double(c.values[0]), fd(d.size());
-    for (size_t r = 0; r < d.size(); ++r) {
-      const double x0 = d[r], h = 1e-6;
-      d[r] = x0 + h;
-      const double lp = depth_reference(d, c.values[1], c.values[2]);
-      d[r] = x0 - h;
-      const double lm = depth_reference(d, c.values[1], c.values[2]);
-      d[r] = x0;
-      fd[r] = (lp - lm) / (2 * h);
-    }
-    // The gradient carries the cancellations of the standardisation: rtol 1e-3 and atol 1e-4
-    // of the gradient's scale.
-    return std::vector<Expected>{{fd, {1e-4 * max_abs(fd), 1e-3}}, {}, {}};
-  };
-  e.fd = GradCheckOptions{};
-  e.flops = [](const OpShape& s) { return double(s.dims[0]) * 30; };
-  return e;
-}
-
 // sparsity_loss: L1 on the object NeRFs' alpha inside their masks (the static NeRF n = 0 is
 // exempt). A mean of values in [0, 1], each a few float32 roundings from its float64 value
 // (expm1 within 4 ulp): rtol 1e-5. Gradients by central differences (harness default), sigma
@@ -153,24 +106,12 @@ OpEntry distortion_entry() {
 // free_space_loss: 2 NeRFs x 1009 rays x 3 samples against the float64 reference and its
 // central differences (tests/test_free_space_loss_op.cpp states the tolerances: the loss
 // rtol 1e-4, its gradient rtol 1e-3 with atol 1e-5 of the gradient's scale).
-FreeSpaceCase free_space_case(const OpShape& s) { return free_space_table_case(s.dims[0], s.dims[1], s.dims[2]); }
-
 OpEntry free_space_entry() {
   OpEntry e;
   e.name = "free_space_loss";
   e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}};
-  e.build = [](Graph& g, const OpShape& s) {
-    const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2];
-    Tensor raw = g.input("raw", Shape{N, R * S, 5}, true), delta = g.input("delta", Shape{N, R, S});
-    Tensor z = g.input("z", Shape{R, S}), depth = g.input("depth", Shape{R}), target = g.input("target", Shape{R});
-    Tensor valid = g.input("valid", Shape{R}), masks = g.input("masks", Shape{N, R});
-    Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks);
-    return OpGraph{{raw, delta, z, depth, target, valid, masks}, {l}, l};
-  };
-  e.values = [](const OpShape& s) {
-    const FreeSpaceCase f = free_space_case(s);
-    return std::vector<std::vector<float>>{f.raw, f.delta, f.z, f.depth, f.target, f.valid, f.masks};
-  };
+  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, 0.0f, nullptr); };
+  e.values = free_space_values;
   e.check = [](const OpShape& s) {
     const FreeSpaceCase f = free_space_case(s);
     const FreeSpaceRun run = run_free_space(f, runtime());
@@ -183,6 +124,58 @@ OpEntry free_space_entry() {
 }
 
 }  // namespace
+
+FreeSpaceCase free_space_case(const OpShape& s) { return free_space_table_case(s.dims[0], s.dims[1], s.dims[2]); }
+
+std::vector<std::vector<float>> free_space_values(const OpShape& s) {
+  const FreeSpaceCase f = free_space_case(s);
+  return {f.raw, f.delta, f.z, f.depth, f.target, f.valid, f.masks};
+}
+
+OpGraph free_space_graph(Graph& g, const OpShape& s, float behind, GradientReducer* ranks) {
+  const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2];
+  Tensor raw = g.input("raw", Shape{N, R * S, 5}, true), delta = g.input("delta", Shape{N, R, S});
+  Tensor z = g.input("z", Shape{R, S}), depth = g.input("depth", Shape{R}), target = g.input("target", Shape{R});
+  Tensor valid = g.input("valid", Shape{R}), masks = g.input("masks", Shape{N, R});
+  Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks, {}, 0.05f, 1, behind, ranks);
+  return OpGraph{{raw, delta, z, depth, target, valid, masks}, {l}, l};
+}
+
+// depth_loss: every fifth ray invalid; its float64 definition and the central differences of
+// it (loss_reference.hpp). With `ranks`, the loss built from moments summed over ranks.
+OpEntry depth_loss_entry(GradientReducer* ranks) {
+  OpEntry e;
+  e.name = ranks ? "depth_loss_over_ranks" : "depth_loss";
+  // The central differences of the device forward (harness default: the loss is smooth away
+  // from zero variance, and the random depths keep the variance O(0.1)) up to 64 rays.
+  e.shapes = {{{kOddRows}, 0, "1009 rays"}, {{57}, 0, "57 rays"}, {{23}, 0, "23 rays"}, {{7}, 0, "7 rays"}};
+  e.build = [ranks](Graph& g, const OpShape& s) {
+    const Shape sh{s.dims[0]};
+    Tensor p = g.input("depth", sh, true), t = g.input("target", sh), w = g.input("valid", sh);
+    Tensor l = depth_loss(p, t, w, ranks);
+    return OpGraph{{p, t, w}, {l}, l};
+  };
+  e.values = [](const OpShape& s) {
+    std::vector<float> w(s.dims[0], 1.0f);
+    for (size_t i = 0; i < w.size(); i += 5) w[i] = 0.0f;
+    return std::vector<std::vector<float>>{random_floats(s.dims[0], 0.0f, 1.0f, 181), random_floats(s.dims[0], -2.0f, 3.0f, 182), w};
+  };
+  // Float32 sums over the rays (one kernel, or the moments summed over ranks; a relative error
+  // of a few 1e-6 at 1009 rays) and a loss near 2 for uncorrelated depths: rtol 1e-4.
+  e.reference = [](const OpCase& c) {
+    return std::vector<Expected>{{{ref_depth_loss(to_double(c.values[0]), c.values[1], c.values[2])}, {0, 1e-4}}};
+  };
+  e.gradient = [](const OpCase& c) {
+    const std::vector<double> fd = ref_depth_loss_gradient(to_double(c.values[0]), c.values[1], c.values[2]);
+    // The gradient carries the cancellations of the standardisation: rtol 1e-3 and atol 1e-4
+    // of the gradient's scale.
+    return std::vector<Expected>{{fd, {1e-4 * max_abs(fd), 1e-3}}, {}, {}};
+  };
+  e.fd = GradCheckOptions{};
+  // Two passes of ~6 operations a ray forward and ~10 backward; the scalar kernels are O(1).
+  e.flops = [](const OpShape& s) { return double(s.dims[0]) * 32; };
+  return e;
+}
 
 void register_ray_loss_ops(std::vector<OpEntry>& t) {
   t.push_back(depth_loss_entry());

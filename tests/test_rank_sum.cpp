@@ -14,6 +14,7 @@
 
 #include "free_space_reference.hpp"
 #include "harness.hpp"
+#include "loss_reference.hpp"
 #include "nova/executor.hpp"
 #include "nova/losses.hpp"
 #include "nova/ops.hpp"
@@ -28,24 +29,6 @@ namespace {
 
 void require_no_errors(const std::vector<std::string>& errors) {
   for (size_t r = 0; r < errors.size(); ++r) BOOST_TEST_REQUIRE(errors[r].empty(), "rank " << r << ": " << errors[r]);
-}
-
-// Float64 depth loss of depth_loss.cl (as test_depth_loss_op.cpp).
-double depth_reference(const std::vector<double>& p, const std::vector<float>& t, const std::vector<float>& w) {
-  double n = 0, sp = 0, st = 0;
-  for (size_t r = 0; r < p.size(); ++r) n += w[r], sp += w[r] * p[r], st += w[r] * t[r];
-  if (n < 2) return 0;
-  const double mp = sp / n, mt = st / n;
-  double vp = 0, vt = 0;
-  for (size_t r = 0; r < p.size(); ++r)
-    vp += w[r] * (p[r] - mp) * (p[r] - mp), vt += w[r] * (t[r] - mt) * (t[r] - mt);
-  const double dp = std::sqrt(vp / n + 1e-6), dt = std::sqrt(vt / n + 1e-6);
-  double sum = 0;
-  for (size_t r = 0; r < p.size(); ++r) {
-    const double e = (p[r] - mp) / dp - (t[r] - mt) / dt;
-    sum += w[r] * e * e;
-  }
-  return sum / n;
 }
 
 template <class T>
@@ -160,7 +143,7 @@ BOOST_AUTO_TEST_CASE(depth_loss_over_ranks_is_the_whole_batchs) {
   }));
   BOOST_TEST(loss[0] == loss[1]);  // every rank has the whole batch's loss
   const std::vector<double> pd = to_double(p);
-  expect_close({loss[0]}, {depth_reference(pd, t, w)}, 0, 1e-4, "depth_loss over two ranks");
+  expect_close({loss[0]}, {ref_depth_loss(pd, t, w)}, 0, 1e-4, "depth_loss over two ranks");
 
   Graph g;
   Tensor tp = g.input("depth", Shape{R}, true), tt = g.input("target", Shape{R}), tw = g.input("valid", Shape{R});
@@ -174,16 +157,7 @@ BOOST_AUTO_TEST_CASE(depth_loss_over_ranks_is_the_whole_batchs) {
   BOOST_TEST(loss[0] == ex.loss(), boost::test_tools::tolerance(1e-5f));
   const std::vector<float> one = ex.get_grad(tp);
 
-  std::vector<double> fd(R), x = pd;
-  for (size_t r = 0; r < R; ++r) {
-    const double x0 = x[r], e = 1e-6;
-    x[r] = x0 + e;
-    const double lp = depth_reference(x, t, w);
-    x[r] = x0 - e;
-    const double lm = depth_reference(x, t, w);
-    x[r] = x0;
-    fd[r] = (lp - lm) / (2 * e);
-  }
+  const std::vector<double> fd = ref_depth_loss_gradient(pd, t, w);
   double scale = 0;
   for (double v : fd) scale = std::max(scale, std::fabs(v));
   expect_close(grad, fd, 1e-4 * scale, 1e-3, "d depth_loss / d depth over two ranks");
