@@ -38,6 +38,41 @@ __kernel void group_ratio_factor(__global float* partial, uint groups, uint part
   partial[2 * groups * parts + g] = den > 0.0f ? 1.0f / (den * c) : 0.0f;
 }
 
+// Split over ranks (data-parallel training): a rank's sums, out[2 g] = num_g and out[2 g + 1]
+// = den_g (the partial layout with one part), which the sum over ranks makes the whole batch's;
+// group_ratio_finish with parts = 1 then finishes the loss from them.
+__kernel void group_sums_finish(__global const float* partial, __global float* out, uint groups,
+                                uint parts) {
+  const uint i = get_global_id(0);
+  if (i >= 2 * groups) return;
+  out[i] = group_sum(partial, i * parts, parts);
+}
+
+// The backward of the sums: d loss / d num_g = gsums[2 g] becomes the factor of group g at
+// partial[1 + g], and partial[0] = 1 stands for the upstream gradient (the backward kernels
+// read gloss[0] factor[factor_at + g] with gloss = partial and factor_at = 1).
+__kernel void group_sums_factor(__global const float* gsums, __global float* partial, uint groups) {
+  const uint g = get_global_id(0);
+  if (g >= groups) return;
+  if (g == 0) partial[0] = 1.0f;
+  partial[1 + g] = gsums[2 * g];
+}
+
+// The gradient of group_ratio_finish(sums, parts = 1) by its sums [2 groups]: for a group with
+// den_g + eps > 0, d / d num_g = gloss / ((den_g + eps) c) and d / d den_g = -gloss num_g /
+// ((den_g + eps)^2 c); 0 for an empty group.
+__kernel void group_ratio_backward(__global const float* sums, __global const float* gloss,
+                                   __global float* grad, uint groups, float c, float eps,
+                                   int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= 2 * groups) return;
+  const uint g = i / 2;
+  const float num = sums[2 * g], den = sums[2 * g + 1] + eps;
+  float v = 0.0f;
+  if (den > 0.0f) v = i % 2 == 0 ? gloss[0] / (den * c) : -gloss[0] * num / (den * den * c);
+  grad[i] = accumulate ? grad[i] + v : v;
+}
+
 // Per-NeRF masked squared error, pred [G, R, K], target [G, R, K] (target_stride R K) or
 // [R, K] (0), mask [G, R]; one work-item per (group g, part p):
 // num = sum over rays r = p, p + parts, ... of mask_g(r) sum_k (pred - target)^2, den = sum mask.

@@ -9,6 +9,7 @@
 #include "loss_reference.hpp"
 #include "nova/losses.hpp"
 #include "op_table.hpp"
+#include "ops/group_ratio.hpp"
 
 namespace nova::test {
 
@@ -311,6 +312,55 @@ OpEntry reference_losses_entry() {
   return e;
 }
 
+// The reference code's ratio losses in the two steps of data-parallel training (ops/
+// group_ratio.hpp): each loss's sums, then the loss from them, which on one rank is the loss
+// itself: the same float64 references and tolerances as reference_losses. The sum over ranks
+// between the steps is rank_sum's.
+OpEntry reference_losses_from_sums_entry() {
+  OpEntry e = reference_losses_entry();
+  e.name = "reference_losses_from_sums";
+  e.build = [](Graph& g, const OpShape& s) {
+    const size_t R = s.dims[0], N = s.dims[1], K = s.dims[2], S = K;
+    Tensor tp = g.input("pred", Shape{N, R, K}, true), tt = g.input("target", Shape{N, R, K}),
+           tm = g.input("mask", Shape{N, R});
+    Tensor ta = g.input("alpha_raw", Shape{N, R * S, 5}, true), td = g.input("delta", Shape{R, S});
+    Tensor tdp = g.input("depth", Shape{N, R}, true);
+    std::vector<Tensor> terms = {detail::group_ratio(detail::masked_mse_area_sums(tp, tt, tm)),
+                                 detail::group_ratio(detail::alpha_loss_outside_sums(ta, td, tm, Tensor{}, true)),
+                                 detail::group_ratio(detail::order_loss_sums(tdp, tm))};
+    Tensor total = weighted_sum(terms, {kW[1], kW[2], kW[3]});
+    return OpGraph{{tp, tt, tm, ta, td, tdp}, terms, total};
+  };
+  e.values = [](const OpShape& s) {
+    const size_t R = s.dims[0], N = s.dims[1], K = s.dims[2], S = K;
+    auto mask = random_floats(N * R, 0, 1, 195);
+    for (float& m : mask) m = m < 0.4f ? 0.0f : m < 0.8f ? 1.0f : m;
+    return std::vector<std::vector<float>>{random_floats(N * R * K, 0, 1, 193), random_floats(N * R * K, 0, 1, 194),
+                                           mask, smooth_raw(N, R * S, 196), random_floats(R * S, 0.05f, 0.5f, 197),
+                                           random_floats(N * R, 0, 1, 198)};
+  };
+  e.reference = [](const OpCase& c) {
+    const size_t R = c.shape.dims[0], N = c.shape.dims[1], K = c.shape.dims[2], S = K;
+    const auto& v = c.values;
+    const Tolerance tol{1e-9, 1e-5};  // as reference_losses
+    return std::vector<Expected>{{{ref_mse_area(v[0], v[1], v[2], N, R, K)}, tol},
+                                 {{ref_alpha_outside(v[3], v[4], v[2], {}, N, R, S)}, tol},
+                                 {{ref_order(v[5], v[2], N, R)}, tol}};
+  };
+  e.gradient = [](const OpCase& c) {
+    const size_t R = c.shape.dims[0], N = c.shape.dims[1], K = c.shape.dims[2], S = K;
+    const auto& v = c.values;
+    const auto scaled = [](std::vector<double> g, float w) {
+      for (double& x : g) x *= w;
+      return g;
+    };
+    return std::vector<Expected>{grad_expected(scaled(ref_mse_area_grad(v[0], v[1], v[2], N, R, K), kW[1])), {}, {},
+                                 grad_expected(scaled(ref_alpha_outside_grad(v[3], v[4], v[2], N, R, S), kW[2])), {},
+                                 grad_expected(scaled(ref_order_grad(v[5], v[2], N, R), kW[3]))};
+  };
+  return e;
+}
+
 }  // namespace
 
 void register_loss_ops(std::vector<OpEntry>& t) {
@@ -321,6 +371,7 @@ void register_loss_ops(std::vector<OpEntry>& t) {
   t.push_back(alpha_loss_entry());
   t.push_back(novel_view_losses_entry());
   t.push_back(reference_losses_entry());
+  t.push_back(reference_losses_from_sums_entry());
 }
 
 }  // namespace nova::test

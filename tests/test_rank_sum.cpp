@@ -12,6 +12,7 @@
 
 #include <cmath>
 
+#include "conventions_reference.hpp"
 #include "free_space_reference.hpp"
 #include "harness.hpp"
 #include "loss_reference.hpp"
@@ -57,6 +58,16 @@ FreeSpaceCase slice_case(const FreeSpaceCase& f, size_t first, size_t count) {
   s.target = part(f.target, first, count);
   s.valid = part(f.valid, first, count);
   return s;
+}
+
+// Rays [first, first + count) of each of the `rows` rows of a [rows, R, width] array.
+std::vector<float> ray_rows(const std::vector<float>& v, size_t rows, size_t R, size_t width, size_t first,
+                            size_t count) {
+  std::vector<float> out;
+  for (size_t n = 0; n < rows; ++n)
+    out.insert(out.end(), v.begin() + static_cast<long>((n * R + first) * width),
+               v.begin() + static_cast<long>((n * R + first + count) * width));
+  return out;
 }
 
 }  // namespace
@@ -262,6 +273,68 @@ BOOST_AUTO_TEST_CASE(twin_ranks_are_two_ranks_with_the_same_rays) {
     BOOST_TEST((free_space[k].d_raw == free_space_twin.d_raw), "d free_space_loss / d raw: rank " << k);
     BOOST_TEST((free_space[k].d_depth == free_space_twin.d_depth), "d depth: rank " << k);
   }
+}
+
+// The reference code's ratio losses (masked_mse_area with each NeRF's own target,
+// alpha_loss_outside, order_loss) of 3 NeRFs x (29 + 29) rays on two ranks: each rank's value
+// against the float64 loss of all 58 rays, whose mask areas and counts are the whole batch's
+// (rtol 1e-5 as the op table's reference_losses: float32 sums of O(1) terms), and the gradients
+// (halved, the trainer's mean over ranks) against the float64 derivatives of the whole batch's
+// losses (rtol 1e-4, atol 1e-6 of the gradient's scale: one division more than one process).
+BOOST_AUTO_TEST_CASE(reference_ratio_losses_over_ranks_are_the_whole_batchs) {
+  const size_t N = 3, R = 58, K = 3, S = 4, half = R / 2;
+  const auto pred = random_floats(N * R * K, 0, 1, 31), target = random_floats(N * R * K, 0, 1, 32);
+  auto masks = random_floats(N * R, 0, 1, 33);
+  for (float& m : masks) m = m < 0.4f ? 0.0f : m < 0.8f ? 1.0f : m;
+  const auto raw = smooth_raw(N, R * S, 34), delta = random_floats(R * S, 0.05f, 0.5f, 35);
+  const auto depth = random_floats(N * R, 0, 1, 36);
+  std::vector<std::vector<float>> losses(2, std::vector<float>(3));
+  std::vector<float> d_pred(pred.size()), d_raw(raw.size()), d_depth(depth.size());
+  require_no_errors(run_ranks(2, [&](int r, GradientReducer& ranks) {
+    const size_t k = static_cast<size_t>(r), a = k * half;
+    Runtime rt(test::runtime().info(), false);
+    Graph g;
+    Tensor tp = g.input("pred", Shape{N, half, K}, true), tt = g.input("target", Shape{N, half, K}),
+           tm = g.input("masks", Shape{N, half});
+    Tensor ta = g.input("raw", Shape{N, half * S, 5}, true), td = g.input("delta", Shape{half, S});
+    Tensor tdp = g.input("depth", Shape{N, half}, true);
+    const std::vector<Tensor> terms = {masked_mse_area(tp, tt, tm, &ranks),
+                                       alpha_loss_outside(ta, td, tm, Tensor{}, true, &ranks),
+                                       order_loss(tdp, tm, &ranks)};
+    for (const Tensor& t : terms) g.keep(t);
+    g.set_loss(weighted_sum(terms, {1.0f, 1.0f, 1.0f}));
+    Executor ex(rt, g);
+    ex.set(tp, ray_rows(pred, N, R, K, a, half));
+    ex.set(tt, ray_rows(target, N, R, K, a, half));
+    ex.set(tm, ray_rows(masks, N, R, 1, a, half));
+    ex.set(ta, ray_rows(raw, N, R, S * 5, a, half));
+    ex.set(td, part(delta, a * S, half * S));
+    ex.set(tdp, ray_rows(depth, N, R, 1, a, half));
+    ex.forward();
+    ex.backward();
+    for (size_t i = 0; i < 3; ++i) losses[k][i] = ex.get(terms[i])[0];
+    // Back into the whole batch's layout, halved: the trainer's mean over ranks.
+    const auto place = [&](const std::vector<float>& mine, std::vector<float>& whole, size_t width) {
+      for (size_t n = 0; n < N; ++n)
+        for (size_t i = 0; i < half * width; ++i) whole[(n * R + a) * width + i] = mine[n * half * width + i] / 2.0f;
+    };
+    place(ex.get_grad(tp), d_pred, K);
+    place(ex.get_grad(ta), d_raw, S * 5);
+    place(ex.get_grad(tdp), d_depth, 1);
+  }));
+  BOOST_TEST((losses[0] == losses[1]));  // every rank has the whole batch's losses
+  expect_close(losses[0],
+               {ref_mse_area(pred, target, masks, N, R, K), ref_alpha_outside(raw, delta, masks, {}, N, R, S),
+                ref_order(depth, masks, N, R)},
+               1e-9, 1e-5, "ratio losses over two ranks");
+  const auto check = [](const std::vector<float>& got, const std::vector<double>& want, const std::string& what) {
+    double scale = 0;
+    for (double v : want) scale = std::max(scale, std::fabs(v));
+    expect_close(got, want, 1e-6 * scale, 1e-4, what);
+  };
+  check(d_pred, ref_mse_area_grad(pred, target, masks, N, R, K), "d masked_mse_area / d pred over two ranks");
+  check(d_raw, ref_alpha_outside_grad(raw, delta, masks, N, R, S), "d alpha_loss_outside / d raw over two ranks");
+  check(d_depth, ref_order_grad(depth, masks, N, R), "d order_loss / d depth over two ranks");
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -9,7 +9,7 @@ namespace nova {
 NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor delta,
                               Tensor noise, const NovelViewTargets& targets,
                               const NovelViewLossWeights& w, const RenderOptions& options,
-                              const LossConventions& cv) {
+                              const LossConventions& cv, GradientReducer* ranks) {
   NovelViewLoss l;
   std::vector<Tensor> terms;
   std::vector<float> weights;
@@ -23,7 +23,7 @@ NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor 
   add(l.nerf_rgb, w.nerf_rgb, [&] {
     if (!cv.nerf_rgb_area) return masked_mse(rendered.nerf_rgb, targets.rgb, targets.masks);
     const Tensor target = targets.nerf_rgb.valid() ? targets.nerf_rgb : targets.rgb;
-    return masked_mse_area(rendered.nerf_rgb, target, targets.masks);
+    return masked_mse_area(rendered.nerf_rgb, target, targets.masks, ranks);
   });
   add(l.mask, w.mask, [&] {
     return cv.mask_l1 ? mask_l1_loss(rendered.mask, targets.masks) : mse(rendered.mask, targets.masks);
@@ -32,7 +32,7 @@ NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor 
   // Without an object NeRF there is nothing to push outside a mask.
   const size_t nerfs = rendered.mask.shape()[0];
   add(l.alpha, nerfs > 1 ? w.alpha : 0.0f, [&] {
-    return cv.alpha_outside ? alpha_loss_outside(raw, delta, targets.masks, noise, options.blend_sigmoid)
+    return cv.alpha_outside ? alpha_loss_outside(raw, delta, targets.masks, noise, options.blend_sigmoid, ranks)
                             : alpha_loss(raw, delta, targets.masks, noise, options.blend_sigmoid);
   });
   add(l.sparsity, nerfs > 1 ? w.sparsity : 0.0f,
@@ -41,7 +41,7 @@ NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor 
     if (!rendered.nerf_depth.valid())
       throw Error("novel_view_loss: the order loss needs nerf_depth (RenderOptions::nerf_depth)",
                   kExitInternal);
-    return order_loss(rendered.nerf_depth, targets.masks);
+    return order_loss(rendered.nerf_depth, targets.masks, ranks);
   });
   if (terms.empty()) throw Error("novel_view_loss: every loss weight is 0", kExitUsage);
   l.total = weighted_sum(terms, weights);

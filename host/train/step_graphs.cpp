@@ -131,7 +131,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);
   NovelViewLoss l = novel_view_loss(out, raw, smp.delta, s->noise,
                                     {s->target_rgb, s->target_masks, s->target_nerf_rgb}, c.weights,
-                                    ro, c.conventions);
+                                    ro, c.conventions, slice.ranks);
   for (auto [name, t] : {std::pair<const char*, Tensor>{"full_rgb", l.full_rgb}, {"nerf_rgb", l.nerf_rgb},
                          {"mask", l.mask}, {"blending", l.blending}, {"alpha", l.alpha},
                          {"sparsity", l.sparsity}, {"order", l.order}})

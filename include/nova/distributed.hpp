@@ -4,8 +4,8 @@
 // share of the rays, [rank R / N, (rank + 1) R / N), with the device randomness of exactly
 // those rays (random.hpp slices); the gradients are summed through a GradientReducer and
 // divided by N, so every rank's Adam makes the same update. The terms normalised by a statistic
-// of the batch (depth standardisation, the free-space fit) take it over every rank's rays
-// through rank_sum ops in the step graph. nova_core knows no MPI: `nova train` implements the
+// of the batch (depth standardisation, the free-space fit, the reference conventions' mask
+// areas and counts) take it over every rank's rays through rank_sum ops in the step graph. nova_core knows no MPI: `nova train` implements the
 // reducer with MPI when it is built with it.
 #include <cstddef>
 #include <vector>

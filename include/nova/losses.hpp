@@ -79,19 +79,24 @@ Tensor mask_l1_loss(Tensor mask, Tensor target);
 // sum_{r,k} mask_g(r) (pred - target)^2 / (sum_r mask_g(r) + 1e-8) / K: each NeRF's squared
 // error over its mask's area. pred [G, R, K]; target [G, R, K] (each group its own target)
 // or [R, K] (shared); mask [G, R]. target and mask are data.
-Tensor masked_mse_area(Tensor pred, Tensor target, Tensor mask);
+// The ratio losses of the reference code (masked_mse_area, alpha_loss_outside, order_loss) take
+// `ranks` as depth_loss: with more than one rank the rays are this rank's share, and the
+// numerators and the mask areas and counts they divide by are the whole batch's (summed over
+// ranks by rank_sum), so every rank's value is one process's loss on all the rays.
+Tensor masked_mse_area(Tensor pred, Tensor target, Tensor mask, GradientReducer* ranks = nullptr);
 
 // Alpha loss of the reference code: for each object NeRF n >= 1, over the rays whose mask
 // is not exactly 1 (and all their samples), the mean of blend_n plus the mean of alpha_n;
 // summed over the objects (an object with no such ray adds 0). Arguments as alpha_loss.
 Tensor alpha_loss_outside(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {},
-                          bool blend_sigmoid = true);
+                          bool blend_sigmoid = true, GradientReducer* ranks = nullptr);
 
 // Order loss of the reference code: the object NeRFs' depth on background rays is the
 // static NeRF's. nerf_depth [N, R] (render_composite's, each NeRF alone), masks [N, R] (row
 // 0 the background, data): sum over n >= 1 and rays r of masks_0(r) |depth_n(r) - depth_0(r)|,
 // divided by (sum_r masks_0(r) + 1e-8) and by R (the reference's img2mae divides by the last
-// dimension, which for [K, R] depth maps is R). Both depths get a gradient. Needs N >= 2.
-Tensor order_loss(Tensor nerf_depth, Tensor masks);
+// dimension, which for [K, R] depth maps is R; split over ranks, the whole batch's R). Both
+// depths get a gradient. Needs N >= 2.
+Tensor order_loss(Tensor nerf_depth, Tensor masks, GradientReducer* ranks = nullptr);
 
 }  // namespace nova

@@ -55,12 +55,16 @@ struct NovelViewLoss {
 
 // Builds the weighted loss of one render (raw/delta/noise/options: those given to
 // render_composite) under `conventions`. Throws when every weight is 0, or when the order
-// loss is weighted and `rendered` has no nerf_depth.
+// loss is weighted and `rendered` has no nerf_depth. With `ranks` of more than one rank
+// (data-parallel training) the rays are this rank's share and the reference conventions'
+// ratio terms divide by the whole batch's mask areas and counts (losses.hpp); the other terms
+// are means over the rays, whose mean over ranks is already the whole batch's.
 NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor delta,
                               Tensor noise, const NovelViewTargets& targets,
                               const NovelViewLossWeights& weights = {},
                               const RenderOptions& options = {},
-                              const LossConventions& conventions = {});
+                              const LossConventions& conventions = {},
+                              GradientReducer* ranks = nullptr);
 
 // The render options of joint training under `conventions` (blend_eps, alpha_full_sum, and
 // nerf_depth when `order` is weighted), and of static pretraining (blend_eps, no_blend).
