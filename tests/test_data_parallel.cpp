@@ -139,6 +139,40 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one) {
   BOOST_TEST(std::count(metrics.begin(), metrics.end(), '\n') == 12);
 }
 
+namespace {
+
+// The first 10 steps of two ranks against one: both ranks log the same losses and hold the same
+// weights, and the loss and every term agree with one process within `tolerance` relative;
+// each of `terms` is present (non-zero) in some step.
+void expect_ranks_match_one(const TwoRanksAndOne& run, double tolerance, std::initializer_list<const char*> terms,
+                            const char* what) {
+  BOOST_REQUIRE(run.whole.loss.size() == 10u);
+  BOOST_REQUIRE(run.split[0].loss.size() == 10u);
+  BOOST_TEST((run.split[0].loss == run.split[1].loss));
+  BOOST_TEST((run.weights[0] == run.weights[1]));
+  std::set<std::string> seen;
+  double worst = 0, worst_term = 0;
+  for (size_t i = 0; i < 10; ++i) {
+    worst = std::max(worst, relative(run.split[0].loss[i], run.whole.loss[i]));
+    const auto& whole = run.whole.terms[i];
+    BOOST_REQUIRE(run.split[0].terms[i].size() == whole.size());
+    for (size_t k = 0; k < whole.size(); ++k) {
+      BOOST_TEST(run.split[0].terms[i][k].first == whole[k].first);
+      const double d = relative(run.split[0].terms[i][k].second, whole[k].second);
+      worst_term = std::max(worst_term, d);
+      BOOST_TEST(d < tolerance, "step " << i + 1 << " " << whole[k].first << ": " << run.split[0].terms[i][k].second
+                                        << " on two ranks, " << whole[k].second << " on one");
+      if (whole[k].second != 0) seen.insert(whole[k].first);
+    }
+  }
+  for (const char* term : terms) BOOST_TEST(seen.count(term) == 1u, term);
+  BOOST_TEST_MESSAGE("largest relative loss difference over 10 steps " << what << ", two ranks against one: " << worst
+                                                                         << " (of a term: " << worst_term << ")");
+  BOOST_TEST(worst < tolerance);
+}
+
+}  // namespace
+
 // With every default term on, the depth loss' standardisation and the free-space fit take the
 // whole batch's statistics through rank_sum, so two ranks still train as one: the loss and every
 // term of the first 10 steps (4 of pretraining, 6 joint, augmented ones among them) within
@@ -155,30 +189,8 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one_with_every_default_term) {
   c.pretrain_steps = 4;
   BOOST_REQUIRE(c.w_depth > 0 && c.w_free_space > 0 && c.weights.sparsity > 0);
   test::TempDir dir("data-parallel-default");
-  const TwoRanksAndOne run = train_both(scene, c, dir);
-  BOOST_REQUIRE(run.whole.loss.size() == 10u);
-  BOOST_REQUIRE(run.split[0].loss.size() == 10u);
-  BOOST_TEST((run.split[0].loss == run.split[1].loss));
-  BOOST_TEST((run.weights[0] == run.weights[1]));
-  std::set<std::string> seen;
-  double worst = 0, worst_term = 0;
-  for (size_t i = 0; i < 10; ++i) {
-    worst = std::max(worst, relative(run.split[0].loss[i], run.whole.loss[i]));
-    const auto& terms = run.whole.terms[i];
-    BOOST_REQUIRE(run.split[0].terms[i].size() == terms.size());
-    for (size_t k = 0; k < terms.size(); ++k) {
-      BOOST_TEST(run.split[0].terms[i][k].first == terms[k].first);
-      const double d = relative(run.split[0].terms[i][k].second, terms[k].second);
-      worst_term = std::max(worst_term, d);
-      BOOST_TEST(d < kDefaultTermsTolerance, "step " << i + 1 << " " << terms[k].first << ": " << run.split[0].terms[i][k].second
-                                          << " on two ranks, " << terms[k].second << " on one");
-      if (terms[k].second != 0) seen.insert(terms[k].first);
-    }
-  }
-  for (const char* term : {"depth", "free_space", "sparsity"}) BOOST_TEST(seen.count(term) == 1u, term);
-  BOOST_TEST_MESSAGE("largest relative loss difference over 10 steps with every default term, two ranks against one: "
-                     << worst << " (of a term: " << worst_term << ")");
-  BOOST_TEST(worst < kDefaultTermsTolerance);
+  expect_ranks_match_one(train_both(scene, c, dir), kDefaultTermsTolerance, {"depth", "free_space", "sparsity"},
+                         "with every default term");
 }
 
 // The reference conventions' terms that divide by the masks' areas and counts (nerf_rgb: each
@@ -196,30 +208,8 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one_with_the_reference_conventions) {
   const TrainConfig c = reference_terms_config();
   BOOST_REQUIRE(c.conventions.nerf_rgb_area && c.conventions.alpha_outside && c.weights.order > 0);
   test::TempDir dir("data-parallel-reference");
-  const TwoRanksAndOne run = train_both(scene, c, dir);
-  BOOST_REQUIRE(run.whole.loss.size() == 10u);
-  BOOST_REQUIRE(run.split[0].loss.size() == 10u);
-  BOOST_TEST((run.split[0].loss == run.split[1].loss));
-  BOOST_TEST((run.weights[0] == run.weights[1]));
-  std::set<std::string> seen;
-  double worst = 0, worst_term = 0;
-  for (size_t i = 0; i < 10; ++i) {
-    worst = std::max(worst, relative(run.split[0].loss[i], run.whole.loss[i]));
-    const auto& terms = run.whole.terms[i];
-    BOOST_REQUIRE(run.split[0].terms[i].size() == terms.size());
-    for (size_t k = 0; k < terms.size(); ++k) {
-      BOOST_TEST(run.split[0].terms[i][k].first == terms[k].first);
-      const double d = relative(run.split[0].terms[i][k].second, terms[k].second);
-      worst_term = std::max(worst_term, d);
-      BOOST_TEST(d < kReferenceTolerance, "step " << i + 1 << " " << terms[k].first << ": " << run.split[0].terms[i][k].second
-                                       << " on two ranks, " << terms[k].second << " on one");
-      if (terms[k].second != 0) seen.insert(terms[k].first);
-    }
-  }
-  for (const char* term : {"nerf_rgb", "alpha", "order"}) BOOST_TEST(seen.count(term) == 1u, term);
-  BOOST_TEST_MESSAGE("largest relative loss difference over 10 steps with the reference conventions, two ranks against one: "
-                     << worst << " (of a term: " << worst_term << ")");
-  BOOST_TEST(worst < kReferenceTolerance);
+  expect_ranks_match_one(train_both(scene, c, dir), kReferenceTolerance, {"nerf_rgb", "alpha", "order"},
+                         "with the reference conventions");
 }
 
 BOOST_AUTO_TEST_CASE(rays_that_do_not_split_are_refused) {
