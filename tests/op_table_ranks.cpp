@@ -66,8 +66,8 @@ OpEntry depth_from_moments_entry() {
 // weights, free_space_fit_from_moments): 2 NeRFs x rays x 3 samples, the single-process
 // entry's case (free_space_table_case), against its float64 loss (rtol 1e-4) and the central
 // differences in sigma (rtol 1e-3, atol 1e-5 of the gradient's scale) as that entry. The
-// depth also feeds an mse, so the moments' backward runs: the fit adds no gradient, leaving
-// the mse's 2 depth / R (float32 of two roundings: rtol 1e-6).
+// depth also feeds an mse, so it takes a gradient: the fit's moments are constants and add
+// none, leaving the mse's 2 depth / R (float32 of two roundings: rtol 1e-6).
 OpEntry free_space_over_ranks_entry() {
   OpEntry e;
   e.name = "free_space_loss_over_ranks";

@@ -9,7 +9,47 @@
 
 using namespace nova;
 
+namespace {
+
+// An op that treats its input as a constant (Op::differentiable_in), writes zeros and counts
+// its backwards.
+class ConstantZeroOp final : public Op {
+ public:
+  explicit ConstantZeroOp(int& backwards) : backwards_(backwards) {}
+  std::string type() const override { return "constant_zero"; }
+  bool differentiable_in(size_t) const override { return false; }
+  void forward(ExecContext& ctx) override { ctx.rt.fill_zero(ctx.out(0), 4 * sizeof(float)); }
+  void backward(ExecContext&) override { ++backwards_; }
+
+ private:
+  int& backwards_;
+};
+
+}  // namespace
+
 BOOST_AUTO_TEST_SUITE(executor)
+
+// An output that takes no gradient from its only differentiable input needs none, and its op
+// runs no backward, though it feeds the loss and the input takes a gradient elsewhere.
+BOOST_AUTO_TEST_CASE(an_input_treated_as_constant_starts_no_backward) {
+  Graph g;
+  Tensor x = g.input("x", Shape{4}, true), t = g.input("t", Shape{4});
+  Tensor c = g.activation("c", Shape{4});
+  int backwards = 0;
+  g.add(std::make_unique<ConstantZeroOp>(backwards), {x}, {c});
+  BOOST_TEST(!c.info().requires_grad);
+  g.set_loss(weighted_sum({mse(x, t), mse(c, t)}, {1.0f, 1.0f}));
+  Executor ex(test::runtime(), g);
+  const std::vector<float> xv = {1, 2, 3, 4}, tv = {0, 0, 0, 0};
+  ex.set(x, xv);
+  ex.set(t, tv);
+  ex.forward();
+  ex.backward();
+  BOOST_TEST(backwards == 0);
+  // d/dx of mse(x, t) alone: 2 (x - t) / 4.
+  const std::vector<float> dx = ex.get_grad(x);
+  for (size_t i = 0; i < 4; ++i) BOOST_TEST(dx[i] == 0.5f * xv[i], boost::test_tools::tolerance(1e-6f));
+}
 
 BOOST_AUTO_TEST_CASE(plan_never_overlaps_live_tensors) {
   std::mt19937 rng(3);

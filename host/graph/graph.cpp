@@ -77,7 +77,7 @@ void Graph::add(std::unique_ptr<Op> op, const std::vector<Tensor>& inputs,
     op->inputs_.push_back(t.id);
     auto& c = tensors_[t.id].consumers;
     if (c.empty() || c.back() != index) c.push_back(index);
-    any_grad = any_grad || tensors_[t.id].requires_grad;
+    any_grad = any_grad || (tensors_[t.id].requires_grad && op->differentiable_in(op->inputs_.size() - 1));
   }
   for (const Tensor& t : outputs) {
     auto& info = tensors_.at(t.id);

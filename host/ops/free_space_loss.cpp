@@ -33,7 +33,6 @@ class FreeSpaceLossOp final : public Op {
 
   void backward(ExecContext& ctx) override {
     cl_mem gl = ctx.grad_out(0), g = ctx.grad_in(0);
-    if (moments_) clear_moment_gradients(ctx);
     if (!gl || !g) return;
     // The rendered depth only places the target (a constant): when it carries a gradient for
     // other consumers and this op writes it first, it must be cleared.
@@ -76,11 +75,6 @@ class FreeSpaceLossOp final : public Op {
   }
 
   size_t moments_at() const { return noise_ ? 8 : 7; }
-  // The fit is a constant (as the rendered depth): its moments get no gradient from here.
-  void clear_moment_gradients(ExecContext& ctx) const {
-    for (size_t i = moments_at(); i < moments_at() + 2; ++i)
-      if (cl_mem d = ctx.grad_in(i); d && !ctx.accumulate_in(i)) ctx.rt.fill_zero(d, 3 * sizeof(float));
-  }
 
   detail::RaySampleLayout l_;
   bool noise_;
@@ -111,7 +105,8 @@ Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor 
   if (noise.valid()) inputs.push_back(noise);
   const bool split = ranks && ranks->size() > 1;
   if (split) {  // the fit's weights: valid rays of the background (masks row 0)
-    const detail::BatchMoments m = detail::batch_moments(depth, target, valid, masks, *ranks);
+    // The fit is a constant, as the rendered depth it places: its moments take no gradient.
+    const detail::BatchMoments m = detail::batch_moments(depth, target, valid, masks, *ranks, /*constant=*/true);
     inputs.push_back(m.first);
     inputs.push_back(m.second);
   }

@@ -9,11 +9,14 @@
 namespace nova {
 namespace {
 
-// Inputs: p, t, valid[, mask][, first]; output [3].
+// Inputs: p, t, valid[, mask][, first]; output [3]. `constant`: p is treated as data (the
+// sums take no gradient, so neither they nor their sum over ranks run a backward).
 class MomentSumsOp final : public Op {
  public:
-  MomentSumsOp(size_t rays, bool mask, bool centred) : rays_(rays), mask_(mask), centred_(centred) {}
+  MomentSumsOp(size_t rays, bool mask, bool centred, bool constant)
+      : rays_(rays), mask_(mask), centred_(centred), constant_(constant) {}
   std::string type() const override { return centred_ ? "moment_sums_centred" : "moment_sums"; }
+  bool differentiable_in(size_t) const override { return !constant_; }
 
   cl_mem mask(ExecContext& ctx) const { return mask_ ? ctx.in(3) : ctx.in(2); }
   size_t first_index() const { return mask_ ? 4 : 3; }
@@ -49,7 +52,7 @@ class MomentSumsOp final : public Op {
 
  private:
   size_t rays_;
-  bool mask_, centred_;
+  bool mask_, centred_, constant_;
 };
 
 // Inputs: first, second (the whole batch's); output: the depth loss [1].
@@ -79,13 +82,13 @@ class DepthFromMomentsOp final : public Op {
   std::vector<TensorId> saved_for_backward() const override { return inputs(); }
 };
 
-Tensor moment_sums(Tensor p, Tensor t, Tensor valid, Tensor mask, Tensor first) {
+Tensor moment_sums(Tensor p, Tensor t, Tensor valid, Tensor mask, Tensor first, bool constant) {
   Graph& g = *p.graph;
   Tensor y = g.activation(p.info().name + (first.valid() ? ".centred_moments" : ".moments"), Shape{3});
   std::vector<Tensor> in = {p, t, valid};
   if (mask.valid()) in.push_back(mask);
   if (first.valid()) in.push_back(first);
-  g.add(std::make_unique<MomentSumsOp>(p.shape().numel(), mask.valid(), first.valid()), in, {y});
+  g.add(std::make_unique<MomentSumsOp>(p.shape().numel(), mask.valid(), first.valid(), constant), in, {y});
   return y;
 }
 
@@ -93,10 +96,10 @@ Tensor moment_sums(Tensor p, Tensor t, Tensor valid, Tensor mask, Tensor first) 
 
 namespace detail {
 
-BatchMoments batch_moments(Tensor p, Tensor t, Tensor valid, Tensor mask, GradientReducer& ranks) {
+BatchMoments batch_moments(Tensor p, Tensor t, Tensor valid, Tensor mask, GradientReducer& ranks, bool constant) {
   BatchMoments m;
-  m.first = rank_sum(moment_sums(p, t, valid, mask, Tensor{}), ranks);
-  m.second = rank_sum(moment_sums(p, t, valid, mask, m.first), ranks);
+  m.first = rank_sum(moment_sums(p, t, valid, mask, Tensor{}, constant), ranks);
+  m.second = rank_sum(moment_sums(p, t, valid, mask, m.first, constant), ranks);
   return m;
 }
 

@@ -295,7 +295,6 @@ Tensor mask_l1_loss(Tensor mask, Tensor target) {
   return y;
 }
 
-
 namespace detail {
 
 GroupSums masked_mse_area_sums(Tensor pred, Tensor target, Tensor mask) {

@@ -87,6 +87,9 @@ class Op {
   // (Graph::add). Ops whose output rows are not the input rows (a scatter back to a dense
   // layout) return false.
   virtual bool propagates_extent() const { return true; }
+  // Whether the op's outputs take a gradient through input `index` (Graph::add): false for
+  // an input the op treats as a constant, so that a gradient-free output starts no backward.
+  virtual bool differentiable_in(size_t /*index*/) const { return true; }
   // Tensors (inputs or outputs of this op) its backward reads; the memory plan keeps them
   // alive until then. Default: every input and output.
   virtual std::vector<TensorId> saved_for_backward() const;
