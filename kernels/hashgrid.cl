@@ -65,38 +65,43 @@ inline void hg_cells(__global const float* p, float4 inv_bound, float res, float
   }
 }
 
-// Table row of the vertex `corner` (bit d: +1 along dimension d) of the cell, and its weight.
-inline uint hg_vertex(const uint* cell, const float* frac, uint corner, uint res, uint res_t,
-                      uint table_size, int dense, float* weight) {
-  const uint primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
-  uint index = 0, stride = 1;
-  float w = 1.0f;
-  for (uint d = 0; d < HG_DIMS; ++d) {
-    const uint bit = (corner >> d) & 1u;
-    const uint v = cell[d] + bit;
-    w *= bit ? frac[d] : 1.0f - frac[d];
-    if (dense) {
-      index += v * stride;
-      stride *= hg_res_of(d, res, res_t) + 1;
-    } else {
-      index ^= v * primes[d];
-    }
-  }
-  *weight = w;
-  return dense ? index : (index & (table_size - 1));
-}
-
 // The table rows and weights of the 2^D vertices around point r of network b at level l.
+// Per dimension the two candidate terms (hash: v * prime, dense: v * stride) and the two
+// weights (1 - frac, frac) are formed once; a corner XORs (or adds) one term per dimension and
+// multiplies one weight per dimension. Corner c takes bit d of c along dimension d. The
+// corner loop unrolls (HG_DIMS is a build option), so the bit tests fold away.
 inline void hg_corners(__global const float* positions, uint b, uint rows, uint r, uint l,
                        __constant float* res, __constant float* res_t, uint table_size,
                        float4 inv_bound, uint* vertex, float* weight) {
+  const uint primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
   const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
   const int dense = hg_dense(resolution, resolution_t, table_size);
   uint cell[HG_DIMS];
   float frac[HG_DIMS];
   hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, res[l], res_t[l], dense, cell, frac);
-  for (uint c = 0; c < HG_CORNERS; ++c)
-    vertex[c] = hg_vertex(cell, frac, c, resolution, resolution_t, table_size, dense, &weight[c]);
+  uint term[HG_DIMS][2];
+  float w1[HG_DIMS][2];
+  uint stride = 1;
+  for (uint d = 0; d < HG_DIMS; ++d) {
+    const uint scale = dense ? stride : primes[d];
+    term[d][0] = cell[d] * scale;
+    term[d][1] = (cell[d] + 1u) * scale;
+    w1[d][0] = 1.0f - frac[d];
+    w1[d][1] = frac[d];
+    stride *= hg_res_of(d, resolution, resolution_t) + 1;
+  }
+  const uint mask = dense ? 0xffffffffu : table_size - 1;
+  for (uint c = 0; c < HG_CORNERS; ++c) {
+    uint index = term[0][c & 1u];
+    float w = w1[0][c & 1u];
+    for (uint d = 1; d < HG_DIMS; ++d) {
+      const uint bit = (c >> d) & 1u;
+      index = dense ? index + term[d][bit] : index ^ term[d][bit];
+      w *= w1[d][bit];
+    }
+    vertex[c] = index & mask;
+    weight[c] = w;
+  }
 }
 
 // One work-item per (network, level, row), rows fastest.

@@ -101,11 +101,11 @@ int train_rank(const Args& args, MpiJob* mpi) {
   const bool created = !fs::exists(out);
   try {
     Trainer trainer(rt, scene, config, out, mpi ? &mpi->reducer() : nullptr);
+    trainer.set_profile(profile);  // before resume(), which builds the step's executor
     if (resume) {
       trainer.resume();
       if (lead) std::cerr << "resumed at step " << trainer.step() << "\n";
     }
-    trainer.set_profile(profile);
     trainer.run(lead ? print_progress : std::function<void(const TrainProgress&)>());
     if (profile && lead) std::cerr << trainer.profile_table();
   } catch (...) {
