@@ -13,6 +13,7 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 #include "bench.hpp"
 #include "dense_fusion.hpp"
@@ -22,6 +23,8 @@
 #include "nova/mlp.hpp"
 #include "nova/ops.hpp"
 #include "options.hpp"
+#include "torch_compare.hpp"
+#include "torch_peer.hpp"
 
 namespace nova::bench {
 namespace {
@@ -137,9 +140,12 @@ std::vector<double> device_layer_seconds(Runtime& rt, size_t m, size_t w, int re
 int mlp(const Args& args) {
   const Options o(args, {{"batches", "16384,65536"}, {"repeats", "3"}, {"device", ""},
                          {"width", "256"}, {"depth", "8"},
-                         {"gemm", "tuned"}, {"layer", "256"}, {"fused-widths", "64,256"}});
+                         {"gemm", "tuned"}, {"layer", "256"}, {"fused-widths", "64,256"},
+                         {"torch", "auto"}, {"torch-threads", "0"}});
   if (o.help()) {
-    std::cout << o.usage("nova-bench mlp");
+    std::cout << o.usage("nova-bench mlp")
+              << "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path\n"
+                 "--torch-threads: PyTorch's threads (0: this machine's hardware threads)\n";
     return 0;
   }
   const int repeats = static_cast<int>(o.integer("repeats"));
@@ -309,10 +315,20 @@ int mlp(const Args& args) {
                   << t.step.two_ops * 1e3 << "," << t.step.ratio() << "\n";
       }
   }
+  // The same network's training step beside PyTorch, with the first provider.
+  set_gemm_provider(rt, providers.front());
+  std::ostringstream torch_csv;
+  const long torch_threads = o.integer("torch-threads");
+  std::cout << "\n";
+  compare_with_torch(rt, c, o.integers("batches"), repeats, torch_python(o.str("torch")),
+                     torch_threads > 0 ? static_cast<int>(torch_threads)
+                                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())),
+                     std::cout, torch_csv);
   std::cout << "\n(device = the whole graph: GEMMs, bias + activation, concat, loss; host BLAS "
                "= the GEMMs alone; 2-op = the same network of linear + bias_act ops)\n\n"
             << profile << "\nCSV\n" << csv.str() << "\nCSV (layer GEMMs)\n" << layer_csv.str()
-            << "\nCSV (fused dense layer)\n" << fused_csv.str();
+            << "\nCSV (fused dense layer)\n" << fused_csv.str()
+            << "\nCSV (beside PyTorch)\n" << torch_csv.str();
   return 0;
 }
 
