@@ -3,7 +3,9 @@
 // step and rays/s over timed steps after a warm-up, the device memory of the step (memory
 // plan, parameters, gradients, Adam) and the process's peak RSS, then a per-op table from a
 // few profiled steps. Occupancy skipping is off (its warm-up would need a trained model): the
-// numbers are those of the dense step, the most a step costs. Built only with nova_io.
+// numbers are those of the dense step, the most a step costs. With --run RUN the bench instead
+// continues a trained run (its configuration, weights, occupancy grids and phase): the step a
+// long training takes once its grids skip empty space. Built only with nova_io.
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -16,6 +18,7 @@
 
 #include "bench.hpp"
 #include "nova/io/scene_io.hpp"
+#include "nova/run_folder.hpp"
 #include "nova/runtime.hpp"
 #include "nova/train_config.hpp"
 #include "nova/trainer.hpp"
@@ -50,19 +53,111 @@ struct Row {
   double seconds = 0, device_mb = 0, rss_mb = 0;
 };
 
+// Seconds per step of `steps` steps after `warmup` untimed ones, from the trainer's current step.
+// The last step's progress report comes after the device has finished it and before run()
+// writes its closing checkpoint, which is no part of a step.
+double time_steps(Runtime& rt, Trainer& t, long warmup, long steps) {
+  t.run({}, t.step() + warmup);
+  rt.finish();
+  const auto a = std::chrono::steady_clock::now();
+  auto b = a;
+  t.run([&](const TrainProgress&) { b = std::chrono::steady_clock::now(); }, t.step() + steps);
+  return std::chrono::duration<double>(b - a).count() / static_cast<double>(steps);
+}
+
+void print_row(const Row& r) {
+  std::cout << std::left << std::setw(10) << r.preset << std::setw(9) << r.phase << "K=" << std::setw(3) << r.objects
+            << std::right << std::fixed << std::setprecision(3) << std::setw(9) << r.seconds << " s/step"
+            << std::setprecision(0) << std::setw(9) << r.rays / r.seconds << " rays/s" << std::setw(8)
+            << r.device_mb << " MB device" << std::setw(7) << r.rss_mb << " MB peak RSS" << std::endl;
+}
+
+void write_csv(const std::vector<Row>& rows, const std::string& out, const std::string& profiles) {
+  std::ostringstream csv;
+  csv << "preset,phase,objects,rays,samples,seconds_per_step,rays_per_second,device_mb,peak_rss_mb\n";
+  for (const Row& r : rows)
+    csv << r.preset << "," << r.phase << "," << r.objects << "," << r.rays << "," << r.samples << "," << r.seconds
+        << "," << r.rays / r.seconds << "," << r.device_mb << "," << r.rss_mb << "\n";
+  std::cout << "\n" << csv.str() << profiles;
+  if (!out.empty()) {
+    const std::string tmp = out + ".tmp";
+    std::ofstream(tmp) << csv.str();
+    fs::rename(tmp, out);
+    std::cout << "\nwrote " << out << "\n";
+  }
+}
+
+// A copy of the run's config.ini and checkpoint.bin in `dir`, resumed: every later step of it
+// is the step the run would take next (its own randomness, grids and their updates).
+std::unique_ptr<Trainer> resumed_copy(Runtime& rt, const Scene& scene, TrainConfig c, const RunFolder& run,
+                                      const fs::path& dir, long more_steps, bool profile = false) {
+  fs::create_directories(dir);
+  fs::copy_file(run.config_path(), dir / kConfigFile, fs::copy_options::overwrite_existing);
+  fs::copy_file(run.checkpoint_path(), dir / kCheckpointFile, fs::copy_options::overwrite_existing);
+  c.steps += static_cast<int>(more_steps);  // room to go on past the run's end
+  c.log_every = 1000000;
+  c.checkpoint_every = 1000000;
+  auto t = std::make_unique<Trainer>(rt, scene, c, dir.string());
+  t->set_profile(profile);  // before resume(), which builds the step's executor
+  t->resume();
+  return t;
+}
+
+int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
+  const RunFolder run(o.str("run"));
+  const RunFiles files = run.read();
+  const std::string scene_dir = o.str("scene").empty() ? files.scene : o.str("scene");
+  if (scene_dir.empty()) throw Error("--run: '" + run.config_path() + "' names no scene: pass --scene");
+  LoadOptions lo;
+  lo.factor = files.config.factor;
+  lo.load_gt = false;
+  const Scene scene = load_scene(scene_dir, lo);
+  const ScratchDir scratch("step");
+  Runtime rt(select_device(o.str("device")), false);
+  Runtime prt(rt.info(), true);
+  const long more = warmup + std::max(steps, profile_steps);
+  Row r;
+  std::ostringstream profiles;
+  {
+    auto t = resumed_copy(rt, scene, files.config, run, scratch / "run", more);
+    const bool joint = t->step() >= files.config.pretrain_steps && scene.num_objects > 0;
+    std::cout << "device " << rt.info().name << "; run " << run.dir() << " (preset " << files.config.preset
+              << ", step " << t->step() << ", " << (joint ? "joint" : "pretraining") << ") on " << scene_dir << "; "
+              << warmup << " warm-up + " << steps << " timed steps, skipping as the run's grids say\n\n";
+    r = Row{files.config.preset, joint ? "joint" : "pretrain", joint ? scene.num_objects : 0, files.config.rays,
+            files.config.samples};
+    r.seconds = time_steps(rt, *t, warmup, steps);
+    r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
+  }
+  r.rss_mb = peak_rss_mb();
+  print_row(r);
+  if (profile_steps > 0) {
+    auto t = resumed_copy(prt, scene, files.config, run, scratch / "profile", more, true);
+    t->run({}, t->step() + warmup);
+    t->reset_profile();
+    t->run({}, t->step() + profile_steps);
+    profiles << "\n" << r.preset << " " << r.phase << " (" << profile_steps << " profiled steps)\n" << t->profile_table();
+  }
+  write_csv({r}, o.str("out"), profiles.str());
+  return 0;
+}
+
 }  // namespace
 
 int step(const Args& args) {
   const Options o(args, {{"scene", ""}, {"presets", "quick,reference"}, {"objects", "1,2"}, {"steps", "5"},
                          {"warmup", "2"}, {"profile-steps", "2"}, {"factor", "1"}, {"device", ""},
-                         {"out", ""}});
+                         {"out", ""}, {"run", ""}});
   if (o.help()) {
-    std::cout << o.usage("nova-bench step") << "\n--objects: numbers of object NeRFs K (the scene's first K)\n";
+    std::cout << o.usage("nova-bench step") << "\n--objects: numbers of object NeRFs K (the scene's first K)\n"
+              << "--run RUN: continue a trained run instead (its config, weights, grids and phase; --scene\n"
+                 "  defaults to the run's scene; --presets, --objects and --factor do not apply)\n";
     return 0;
   }
-  if (o.str("scene").empty()) throw Error("--scene SCENE is required (e.g. the default synthetic scene of nova synth)");
   const long steps = o.integer("steps"), warmup = o.integer("warmup"), profile_steps = o.integer("profile-steps");
   if (steps < 1 || warmup < 0 || profile_steps < 0) throw Error("--steps must be >= 1, --warmup and --profile-steps >= 0");
+  if (!o.str("run").empty()) return step_of_run(o, steps, warmup, profile_steps);
+  if (o.str("scene").empty()) throw Error("--scene SCENE is required (e.g. the default synthetic scene of nova synth)");
   LoadOptions lo;
   lo.factor = static_cast<int>(o.integer("factor"));
   lo.load_gt = false;
@@ -107,14 +202,7 @@ int step(const Args& args) {
         r.samples = c.samples;
         {
           Trainer t(rt, s, c, (scratch / "run").string());
-          t.run({}, warmup);
-          rt.finish();
-          const auto a = std::chrono::steady_clock::now();
-          // The last step's progress report comes after the device has finished it and before
-          // run() writes its closing checkpoint, which is no part of a step.
-          auto b = a;
-          t.run([&](const TrainProgress&) { b = std::chrono::steady_clock::now(); }, warmup + steps);
-          r.seconds = std::chrono::duration<double>(b - a).count() / static_cast<double>(steps);
+          r.seconds = time_steps(rt, t, warmup, steps);
           r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
         }
         r.rss_mb = peak_rss_mb();
@@ -128,23 +216,9 @@ int step(const Args& args) {
                    << " (" << profile_steps << " profiled steps)\n" << t.profile_table();
         }
         rows.push_back(r);
-        std::cout << std::left << std::setw(10) << r.preset << std::setw(9) << r.phase << "K=" << std::setw(3) << r.objects
-                  << std::right << std::fixed << std::setprecision(3) << std::setw(9) << r.seconds << " s/step"
-                  << std::setprecision(0) << std::setw(9) << r.rays / r.seconds << " rays/s" << std::setw(8)
-                  << r.device_mb << " MB device" << std::setw(7) << r.rss_mb << " MB peak RSS" << std::endl;
+        print_row(r);
       }
-  std::ostringstream csv;
-  csv << "preset,phase,objects,rays,samples,seconds_per_step,rays_per_second,device_mb,peak_rss_mb\n";
-  for (const Row& r : rows)
-    csv << r.preset << "," << r.phase << "," << r.objects << "," << r.rays << "," << r.samples << "," << r.seconds
-        << "," << r.rays / r.seconds << "," << r.device_mb << "," << r.rss_mb << "\n";
-  std::cout << "\n" << csv.str() << profiles.str();
-  if (!o.str("out").empty()) {
-    const std::string tmp = o.str("out") + ".tmp";
-    std::ofstream(tmp) << csv.str();
-    fs::rename(tmp, o.str("out"));
-    std::cout << "\nwrote " << o.str("out") << "\n";
-  }
+  write_csv(rows, o.str("out"), profiles.str());
   return 0;
 }
 

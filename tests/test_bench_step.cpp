@@ -68,6 +68,31 @@ BOOST_AUTO_TEST_CASE(bad_inputs_are_refused, *boost::unit_test::precondition([](
   }
 }
 
+// --run continues a copy of a trained run: one row of the run's own phase and object count,
+// and the run folder itself is left as it was.
+BOOST_AUTO_TEST_CASE(continues_a_trained_run, *boost::unit_test::precondition([](auto) { return built("nova") && has_bench(); })) {
+  TempDir dir("bench-step-run");
+  const fs::path run = dir / "run", csv = dir / "step.csv";
+  const CommandResult trained = run_built("nova", "train --scene " + cached_tiny_scene().string() + " --out " + run.string() +
+                                               " --pretrain-steps 4 --steps 6 --occupancy-warmup 2 --occupancy-every 2", dir);
+  BOOST_TEST_REQUIRE(trained.code == 0, trained.err);
+  const std::string checkpoint = read_all(run / "checkpoint.bin");
+  const CommandResult r = run_bench_step("--run " + run.string() + " --steps 1 --warmup 1 --profile-steps 1 --out " + csv.string(), dir);
+  BOOST_TEST_REQUIRE(r.code == 0, r.err);
+  BOOST_TEST(r.out.find("step 10, joint") != std::string::npos, r.out);
+  std::istringstream lines(read_all(csv));
+  std::string header, row, extra;
+  std::getline(lines, header);
+  std::getline(lines, row);
+  BOOST_TEST(row.rfind("quick,joint,2,", 0) == 0u, row);  // the tiny scene's two objects
+  BOOST_TEST(!std::getline(lines, extra));
+  BOOST_TEST(r.out.find("hash_encoding (backward)") != std::string::npos);  // its per-op table
+  BOOST_TEST(read_all(run / "checkpoint.bin") == checkpoint);
+  const CommandResult missing = run_bench_step("--run " + (dir / "none").string(), dir);
+  BOOST_TEST(missing.code == 2);
+  BOOST_TEST(missing.err.find((dir / "none").string()) != std::string::npos, missing.err);
+}
+
 BOOST_AUTO_TEST_SUITE_END()
 
 }  // namespace nova::test
