@@ -15,6 +15,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <thread>
 
 #include "bench.hpp"
 #include "nova/io/scene_io.hpp"
@@ -23,6 +24,7 @@
 #include "nova/train_config.hpp"
 #include "nova/trainer.hpp"
 #include "options.hpp"
+#include "torch_peer.hpp"
 
 namespace nova::bench {
 namespace {
@@ -51,33 +53,79 @@ struct Row {
   std::string preset, phase;
   int objects = 0, rays = 0, samples = 0;
   double seconds = 0, device_mb = 0, rss_mb = 0;
+  double torch_seconds = 0;  // PyTorch's step of the same MLPs alone (0: not compared)
 };
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// The MLPs of a step in PyTorch: the preset's static trunk (its encoded input, depth x width,
+// skip, 4 outputs) at rays x samples rows for each of the step's NeRFs, as one batch (the same
+// FLOPs as one network each). Null where `python` is empty or has no torch (why says so).
+std::unique_ptr<TorchPeer> torch_for(const std::string& python, const TrainConfig& c, int nerfs, std::string& why) {
+  if (python.empty()) {
+    why = "--torch off, or no /usr/bin/python3";
+    return nullptr;
+  }
+  const FieldConfig& f = c.field;
+  TorchMlpShape shape;
+  shape.batch = static_cast<size_t>(c.rays) * static_cast<size_t>(c.samples) * static_cast<size_t>(nerfs);
+  shape.inputs = f.encoding == Encoding::HashGrid ? f.hash.outputs() : 3 + 6 * f.pos_freqs;
+  shape.width = f.width;
+  shape.depth = f.depth;
+  shape.skip = f.skip < f.depth ? f.skip : -1;
+  shape.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return TorchPeer::start(python, shape, why);
+}
 
 // Seconds per step of `steps` steps after `warmup` untimed ones, from the trainer's current step.
 // The last step's progress report comes after the device has finished it and before run()
 // writes its closing checkpoint, which is no part of a step.
-double time_steps(Runtime& rt, Trainer& t, long warmup, long steps) {
+// With a PyTorch peer, nova's steps are timed one at a time, each followed by one of the peer's
+// (alternating), and both times are medians; `torch_seconds` gets the peer's.
+double time_steps(Runtime& rt, Trainer& t, long warmup, long steps, TorchPeer* peer = nullptr,
+                  double* torch_seconds = nullptr) {
   t.run({}, t.step() + warmup);
   rt.finish();
-  const auto a = std::chrono::steady_clock::now();
-  auto b = a;
-  t.run([&](const TrainProgress&) { b = std::chrono::steady_clock::now(); }, t.step() + steps);
-  return std::chrono::duration<double>(b - a).count() / static_cast<double>(steps);
+  const auto one_run = [&](long n) {
+    const auto a = std::chrono::steady_clock::now();
+    auto b = a;
+    t.run([&](const TrainProgress&) { b = std::chrono::steady_clock::now(); }, t.step() + n);
+    return std::chrono::duration<double>(b - a).count();
+  };
+  if (!peer) return one_run(steps) / static_cast<double>(steps);
+  std::vector<double> nova_s, torch_s;
+  for (long i = 0; i < steps; ++i) {
+    nova_s.push_back(one_run(1));
+    torch_s.push_back(peer->step());
+  }
+  *torch_seconds = median(torch_s);
+  return median(nova_s);
 }
 
 void print_row(const Row& r) {
   std::cout << std::left << std::setw(10) << r.preset << std::setw(9) << r.phase << "K=" << std::setw(3) << r.objects
             << std::right << std::fixed << std::setprecision(3) << std::setw(9) << r.seconds << " s/step"
             << std::setprecision(0) << std::setw(9) << r.rays / r.seconds << " rays/s" << std::setw(8)
-            << r.device_mb << " MB device" << std::setw(7) << r.rss_mb << " MB peak RSS" << std::endl;
+            << r.device_mb << " MB device" << std::setw(7) << r.rss_mb << " MB peak RSS";
+  if (r.torch_seconds > 0)
+    std::cout << std::setprecision(3) << "   PyTorch, its MLPs alone: " << r.torch_seconds << " s/step (nova / PyTorch "
+              << std::setprecision(2) << r.torch_seconds / r.seconds << ")";
+  std::cout << std::endl;
 }
 
 void write_csv(const std::vector<Row>& rows, const std::string& out, const std::string& profiles) {
   std::ostringstream csv;
-  csv << "preset,phase,objects,rays,samples,seconds_per_step,rays_per_second,device_mb,peak_rss_mb\n";
-  for (const Row& r : rows)
+  csv << "preset,phase,objects,rays,samples,seconds_per_step,rays_per_second,device_mb,peak_rss_mb,"
+         "torch_mlps_seconds_per_step\n";
+  for (const Row& r : rows) {
     csv << r.preset << "," << r.phase << "," << r.objects << "," << r.rays << "," << r.samples << "," << r.seconds
-        << "," << r.rays / r.seconds << "," << r.device_mb << "," << r.rss_mb << "\n";
+        << "," << r.rays / r.seconds << "," << r.device_mb << "," << r.rss_mb << ",";
+    if (r.torch_seconds > 0) csv << r.torch_seconds;
+    csv << "\n";
+  }
   std::cout << "\n" << csv.str() << profiles;
   if (!out.empty()) {
     const std::string tmp = out + ".tmp";
@@ -126,7 +174,10 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
               << warmup << " warm-up + " << steps << " timed steps, skipping as the run's grids say\n\n";
     r = Row{files.config.preset, joint ? "joint" : "pretrain", joint ? scene.num_objects : 0, files.config.rays,
             files.config.samples};
-    r.seconds = time_steps(rt, *t, warmup, steps);
+    std::string why;
+    auto peer = torch_for(torch_python(o.str("torch")), files.config, 1 + (joint ? scene.num_objects : 0), why);
+    if (!peer) std::cout << "PyTorch: not compared (" << why << ")\n";
+    r.seconds = time_steps(rt, *t, warmup, steps, peer.get(), &r.torch_seconds);
     r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
   }
   r.rss_mb = peak_rss_mb();
@@ -147,11 +198,13 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
 int step(const Args& args) {
   const Options o(args, {{"scene", ""}, {"presets", "quick,reference"}, {"objects", "1,2"}, {"steps", "5"},
                          {"warmup", "2"}, {"profile-steps", "2"}, {"factor", "1"}, {"device", ""},
-                         {"out", ""}, {"run", ""}});
+                         {"out", ""}, {"run", ""}, {"torch", "auto"}});
   if (o.help()) {
     std::cout << o.usage("nova-bench step") << "\n--objects: numbers of object NeRFs K (the scene's first K)\n"
               << "--run RUN: continue a trained run instead (its config, weights, grids and phase; --scene\n"
-                 "  defaults to the run's scene; --presets, --objects and --factor do not apply)\n";
+                 "  defaults to the run's scene; --presets, --objects and --factor do not apply)\n"
+              << "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path: each row's\n"
+                 "  MLPs alone (the preset's trunk at the step's rows of every NeRF) in PyTorch, alternating\n";
     return 0;
   }
   const long steps = o.integer("steps"), warmup = o.integer("warmup"), profile_steps = o.integer("profile-steps");
@@ -182,6 +235,8 @@ int step(const Args& args) {
             << " warm-up + " << steps << " timed steps per row, occupancy skipping off (the dense step)\n\n";
   std::vector<Row> rows;
   std::ostringstream profiles;
+  const std::string python = torch_python(o.str("torch"));
+  bool told_torch = false;
   for (size_t pi = 0; pi < presets.size(); ++pi)
     for (const bool joint : {false, true})
       for (int K : objects) {
@@ -202,7 +257,11 @@ int step(const Args& args) {
         r.samples = c.samples;
         {
           Trainer t(rt, s, c, (scratch / "run").string());
-          r.seconds = time_steps(rt, t, warmup, steps);
+          std::string why;
+          auto peer = torch_for(python, c, 1 + r.objects, why);
+          if (!peer && !told_torch) std::cout << "PyTorch: not compared (" << why << ")\n";
+          told_torch = true;
+          r.seconds = time_steps(rt, t, warmup, steps, peer.get(), &r.torch_seconds);
           r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
         }
         r.rss_mb = peak_rss_mb();

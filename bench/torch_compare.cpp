@@ -33,7 +33,7 @@ void compare_with_torch(Runtime& rt, const MlpConfig& c, const std::vector<long>
     const size_t m = static_cast<size_t>(batch_l);
     for (bool train : {false, true}) {
       std::string why;
-      TorchMlpShape shape{m, c.width, c.depth, c.skip, threads, !train};
+      TorchMlpShape shape{m, 63, c.width, c.depth, c.skip, threads, !train};
       std::unique_ptr<TorchPeer> peer = TorchPeer::start(python, shape, why);
       if (!peer) {
         out << "PyTorch: not compared (" << why << ")\n";

@@ -3,12 +3,12 @@
 
 nova-bench mlp starts this script as a child and alternates with its own steps, so both see the
 same machine state: it writes one line per step it is asked for on stdin ("step\n") with the
-seconds that step took, and exits on end of input. The network is nova-bench's: 63 inputs,
+seconds that step took, and exits on end of input. The network is nova-bench's: INPUTS inputs,
 DEPTH x WIDTH ReLU layers, the input concatenated again after layer index SKIP, 4 linear
 outputs, an MSE loss against a constant target, and one Adam update per step (PyTorch's Adam,
 the formulation nova's optimiser follows).
 
-usage: torch_mlp.py BATCH [--threads N] [--width 256] [--depth 8] [--skip 4] [--forward-only]
+usage: torch_mlp.py BATCH [--threads N] [--inputs 63] [--width 256] [--depth 8] [--skip 4] [--forward-only]
 Prints "ready torch VERSION threads N" once the first (warm-up) step is done, or
 "unavailable: REASON" and exits 3 where torch cannot be imported.
 """
@@ -21,6 +21,7 @@ def main():
     p = argparse.ArgumentParser()
     p.add_argument("batch", type=int)
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--inputs", type=int, default=63)
     p.add_argument("--width", type=int, default=256)
     p.add_argument("--depth", type=int, default=8)
     p.add_argument("--skip", type=int, default=4)
@@ -37,10 +38,10 @@ def main():
     class Mlp(torch.nn.Module):
         def __init__(self):
             super().__init__()
-            layers, k = [], 63
+            layers, k = [], a.inputs
             for i in range(a.depth):
                 layers.append(torch.nn.Linear(k, a.width))
-                k = 63 + a.width if i == a.skip else a.width
+                k = a.inputs + a.width if i == a.skip else a.width
             self.hidden = torch.nn.ModuleList(layers)
             self.out = torch.nn.Linear(k, 4)
 
@@ -54,7 +55,7 @@ def main():
 
     net = Mlp()
     opt = torch.optim.Adam(net.parameters(), lr=5e-4)
-    x = torch.full((a.batch, 63), 0.1)
+    x = torch.full((a.batch, a.inputs), 0.1)
     target = torch.full((a.batch, 4), 0.5)
 
     def step():

@@ -22,7 +22,7 @@ std::unique_ptr<TorchPeer> TorchPeer::start(const std::string& python, const Tor
   int down[2], up[2];
   if (pipe(down) != 0 || pipe(up) != 0) throw Error("nova-bench: cannot create a pipe for PyTorch");
   std::vector<std::string> args = {python, "-c", kTorchMlpScript, std::to_string(s.batch),
-                                   "--threads", std::to_string(s.threads), "--width", std::to_string(s.width),
+                                   "--threads", std::to_string(s.threads), "--inputs", std::to_string(s.inputs), "--width", std::to_string(s.width),
                                    "--depth", std::to_string(s.depth), "--skip", std::to_string(s.skip)};
   if (s.forward_only) args.push_back("--forward-only");
   const pid_t pid = fork();

@@ -10,7 +10,7 @@ namespace nova::bench {
 
 struct TorchMlpShape {
   size_t batch = 65536;
-  int width = 256, depth = 8, skip = 4;
+  int inputs = 63, width = 256, depth = 8, skip = 4;
   int threads = 2;
   bool forward_only = false;
 };
