@@ -3,8 +3,10 @@
 // float64 host reference, the shapes to run it at (odd sizes: no multiple of a work-group or
 // tile, and 1-row cases), tolerances with their reasons, and a FLOP count. One harness
 // (op_harness.hpp) checks every entry; tests/test_op_table.cpp also fails for an op class of
-// host/ that no entry builds.
+// host/ that no entry builds. The table needs no Boost (library nova_op_table): the test
+// binary checks it, and `nova-bench ops` times it (bench/bench_ops.cpp).
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,7 +14,9 @@
 #include "free_space_reference.hpp"
 #include "harness.hpp"
 #include "nova/distributed.hpp"
+#include "nova/executor.hpp"
 #include "nova/graph.hpp"
+#include "render_reference.hpp"
 
 namespace nova::test {
 
@@ -76,14 +80,47 @@ struct OpEntry {
   // differentiable or its gradient is deliberately not the derivative (gradient_gate).
   std::optional<GradCheckOptions> fd;
   size_t fd_max_rows = 64;
-  // A check of its own instead of the generic forward and gradient (ops whose reference runs
-  // a whole problem: render_composite, free_space_loss); it must build executors with
-  // guarded_options().
-  std::function<void(const OpShape&)> check;
+  // Without `reference`: the entry's reference runs a whole problem (render_composite,
+  // free_space_loss), and the test binary checks it with a check of its own, found by the
+  // entry's name (op_table_checks.cpp).
   // Floating-point operations of one forward + backward at the shape (an estimate of the
-  // arithmetic the kernels do; 0 for copies), for the timing mode.
+  // arithmetic the kernels do; 0 for copies), for `nova-bench ops`.
   std::function<double(const OpShape&)> flops;
+  // Where a shape needs the process set up before its executors are built (an environment
+  // choice such as NOVA_HASH_BACKWARD) or a device feature: sets it up and returns "", or
+  // returns why the device cannot run the shape (it is skipped). `restore` undoes the set-up.
+  std::function<std::string(const OpShape&, const Runtime&)> prepare;
+  std::function<void()> restore;
 };
+
+// An entry's `prepare` for one shape, undone when it goes; skipped() says why the device
+// cannot run the shape, empty when it can.
+class ShapeSetup {
+ public:
+  ShapeSetup(const OpEntry& entry, const OpShape& shape, const Runtime& rt);
+  ~ShapeSetup();
+  ShapeSetup(const ShapeSetup&) = delete;
+  ShapeSetup& operator=(const ShapeSetup&) = delete;
+  const std::string& skipped() const { return skipped_; }
+
+ private:
+  const OpEntry& entry_;
+  std::string skipped_;
+  bool prepared_ = false;
+};
+
+// An entry's graph ready to run: its outputs kept and, where it has inputs to differentiate
+// and no loss of its own, loss = sum_k mse(outputs[k], targets[k]).
+struct BuiltEntry {
+  Graph g;
+  OpGraph op;
+  std::vector<Tensor> targets;
+};
+std::unique_ptr<BuiltEntry> build_entry(const OpEntry& entry, const OpShape& shape);
+// Sets the entry's input values and random targets (uniform in [-1, 1], seeds 7, 8, ...) on
+// an executor of the built graph; returns the targets.
+std::vector<std::vector<float>> set_entry_inputs(Executor& ex, const BuiltEntry& built,
+                                                 const std::vector<std::vector<float>>& values);
 
 // Every entry, in registration order (one function per family).
 const std::vector<OpEntry>& op_table();
@@ -105,6 +142,13 @@ FreeSpaceCase free_space_case(const OpShape& s);
 std::vector<std::vector<float>> free_space_values(const OpShape& s);
 OpGraph free_space_graph(Graph& g, const OpShape& s, float behind, GradientReducer* ranks);
 void register_rank_ops(std::vector<OpEntry>& table);
+// The stand-in for a second rank that every graph of the table over ranks holds
+// (twin_ranks_reducer.hpp).
+GradientReducer& twin_ranks();
+
+// The render_composite problem at a shape (op_table_render.cpp): dims N NeRFs, R rays,
+// S samples; variant 0 default options, 1 the reference code's, 2 plain compositing.
+RenderRefInput render_table_case(const OpShape& s);
 
 // The row count of the odd-size sweep: a prime, more than any work-group nova chooses, so
 // several groups and a partial last one on every device.

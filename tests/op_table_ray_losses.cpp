@@ -105,20 +105,14 @@ OpEntry distortion_entry() {
 
 // free_space_loss: 2 NeRFs x 1009 rays x 3 samples against the float64 reference and its
 // central differences (tests/test_free_space_loss_op.cpp states the tolerances: the loss
-// rtol 1e-4, its gradient rtol 1e-3 with atol 1e-5 of the gradient's scale).
+// rtol 1e-4, its gradient rtol 1e-3 with atol 1e-5 of the gradient's scale); the check is
+// op_table_checks.cpp's.
 OpEntry free_space_entry() {
   OpEntry e;
   e.name = "free_space_loss";
   e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}};
   e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, 0.0f, nullptr); };
   e.values = free_space_values;
-  e.check = [](const OpShape& s) {
-    const FreeSpaceCase f = free_space_case(s);
-    const FreeSpaceRun run = run_free_space(f, runtime());
-    expect_close({run.loss}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss");
-    const std::vector<double> fd = free_space_sigma_fd(f, 1e-3f);
-    expect_close(run.d_raw, fd, 1e-5 * max_abs(fd), 1e-3, "d free_space_loss / d raw");
-  };
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40; };
   return e;
 }

@@ -7,18 +7,15 @@
 #include "nova/render.hpp"
 #include "op_table.hpp"
 #include "rays_reference.hpp"
-#include "render_check.hpp"
 
 namespace nova::test {
-
-namespace {
 
 // render.cl: render_forward / render_backward, one work-item per ray, with density noise.
 // Variant 0: the default options; 1: the reference code's (blend epsilon 1e-8, alpha_full as
 // a sum, nerf_depth); 2: plain compositing (one NeRF, no blend). Tolerances as test_render:
 // forward atol 2e-6 rtol 1e-5; gradient against float64 finite differences of the reference,
-// rtol 1e-3, atol 1e-4 of the gradient scale.
-RenderRefInput render_case(const OpShape& s) {
+// rtol 1e-3, atol 1e-4 of the gradient scale (op_table_checks.cpp).
+RenderRefInput render_table_case(const OpShape& s) {
   const int N = static_cast<int>(s.dims[0]), R = static_cast<int>(s.dims[1]), S = static_cast<int>(s.dims[2]);
   RenderRefInput in = random_render_case(N, R, S, 5, false, true, 151 + 10 * unsigned(s.variant));
   in.blend_eps = s.variant == 1 ? 1e-8 : in.blend_eps;
@@ -26,6 +23,8 @@ RenderRefInput render_case(const OpShape& s) {
   in.no_blend = s.variant == 2;
   return in;
 }
+
+namespace {
 
 OpEntry render_entry() {
   OpEntry e;
@@ -43,15 +42,8 @@ OpEntry render_entry() {
     return OpGraph{{raw, delta, z, noise}, {out.rgb, out.mask, out.depth}, {}};
   };
   e.values = [](const OpShape& s) {
-    const RenderRefInput in = render_case(s);
+    const RenderRefInput in = render_table_case(s);
     return std::vector<std::vector<float>>{to_float(in.raw), to_float(in.delta), to_float(in.z), to_float(in.noise)};
-  };
-  e.check = [](const OpShape& s) {
-    const RenderRefInput in = render_case(s);
-    const RenderTargets t = random_targets(in, 152 + 10 * unsigned(s.variant));
-    const DeviceRender d = run_device_render(in, t);
-    expect_forward_close(d, in, 2e-6, 1e-5, "render " + s.label);
-    expect_gradient_close(d, in, t, 1e-4, 1e-3, "render " + s.label);
   };
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 120; };
   return e;
@@ -120,7 +112,8 @@ OpEntry rays_entry() {
 }
 
 // instance_points: points x 3 placed instances, NDC and metric, as test_rays
-// (rays_reference.hpp states the tolerance: 1e-4 on NDC values in [-2, 2]).
+// (rays_reference.hpp states the tolerance: 1e-4 on NDC values in [-2, 2]; the check is
+// op_table_checks.cpp's).
 OpEntry instance_points_entry() {
   OpEntry e;
   e.name = "instance_points";
@@ -132,7 +125,6 @@ OpEntry instance_points_entry() {
   e.values = [](const OpShape& s) {
     return std::vector<std::vector<float>>{random_floats(s.dims[0] * 3, -0.5f, 0.5f, 163), random_floats(36, -1, 1, 164)};
   };
-  e.check = [](const OpShape& s) { check_instance_points(runtime(), s.dims[0], 163); };
   e.flops = [](const OpShape& s) { return double(s.dims[0]) * 3 * 30; };
   return e;
 }

@@ -3,7 +3,8 @@
 // derivative and central differences, on executors that check every op against writes outside
 // its tensors. Then the coverage: every op class the library defines has an entry, and every
 // kernel of every embedded family ran at a size that leaves a partial work-group (the table's
-// odd shapes, and the kernels outside ops in op_table_kernels.cpp) - no exemptions.
+// odd shapes, and the kernels outside ops in op_table_kernels.cpp) - no exemptions. Timing
+// the table is `nova-bench ops` (bench/bench_ops.cpp).
 //
 // Shapes and tolerances are stated with each entry. Odd sizes: 1009 rows (a prime, more than
 // any work-group nova chooses, so several groups and a partial last one on every device), odd
@@ -15,7 +16,6 @@
 #include <boost/test/unit_test.hpp>
 
 #include <algorithm>
-#include <iomanip>
 #include <map>
 #include <memory>
 #include <regex>
@@ -119,6 +119,17 @@ BOOST_AUTO_TEST_CASE(every_op_class_has_an_entry) {
   for (const auto& [c, name] : entry_of) BOOST_TEST_MESSAGE(c << ": " << name);
 }
 
+// A check of its own (op_table_checks.cpp) belongs to an entry of that name that has no
+// float64 reference of the generic kind, so none is left behind by a renamed entry.
+BOOST_AUTO_TEST_CASE(own_checks_name_entries_without_a_reference) {
+  for (const auto& [name, check] : own_checks()) {
+    const auto& t = nova::test::op_table();
+    const auto e = std::find_if(t.begin(), t.end(), [&](const OpEntry& x) { return x.name == name; });
+    BOOST_TEST_REQUIRE((e != t.end()), "own check '" << name << "' names no entry of the op table");
+    BOOST_TEST(!e->reference, "entry '" << name << "' has a reference and a check of its own");
+  }
+}
+
 // The guards catch a kernel that writes one float past its output (fill_rows with a count one
 // larger than the tensor), and the same launch within bounds passes.
 BOOST_AUTO_TEST_CASE(guards_catch_an_out_of_bounds_kernel) {
@@ -174,31 +185,6 @@ BOOST_AUTO_TEST_CASE(every_kernel_ran_at_an_odd_size,
     }
   }
   BOOST_TEST(kernels >= 40u, "only " << kernels << " kernels parsed from the embedded sources");
-}
-
-BOOST_AUTO_TEST_SUITE_END()
-
-// The timing mode: milliseconds and GFLOP/s of one forward + backward (unguarded executors)
-// of every entry at its largest shape, mean of 10 after a warm-up. Not a CTest test (speed is
-// measured, never asserted): `nova_tests --run_test=op_timing --log_level=message`.
-BOOST_AUTO_TEST_SUITE(op_timing, *utf::disabled())
-
-BOOST_AUTO_TEST_CASE(every_entry) {
-  for (const OpEntry& e : nova::test::op_table()) {
-    const OpShape& s = *std::max_element(e.shapes.begin(), e.shapes.end(), [](const OpShape& a, const OpShape& b) {
-      const auto size = [](const OpShape& x) {
-        size_t n = 1;
-        for (size_t d : x.dims) n *= d;
-        return n;
-      };
-      return size(a) < size(b);
-    });
-    const OpTimingResult t = time_entry(e, s, 10);
-    BOOST_TEST(t.seconds > 0);
-    BOOST_TEST_MESSAGE(std::left << std::setw(22) << e.name << std::setw(44) << s.label << std::right
-                                 << std::setw(10) << std::fixed << std::setprecision(3) << t.seconds * 1e3 << " ms "
-                                 << std::setw(8) << std::setprecision(2) << t.flops / t.seconds * 1e-9 << " GFLOP/s");
-  }
 }
 
 BOOST_AUTO_TEST_SUITE_END()
