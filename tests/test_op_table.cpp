@@ -94,6 +94,40 @@ class OverrunOp final : public Op {
   unsigned count_;
 };
 
+// Where StrayWriteOp writes its one float: just before or just past its output (forward), its
+// parameter input (forward) or that parameter's gradient (backward); Nowhere: no stray write.
+enum class Stray { Nowhere, BeforeOutput, PastOutput, BeforeParameter, PastParameter, BeforeGradient, PastGradient };
+
+// Writes one float just outside one of its buffers, as a kernel that under- or over-runs
+// would: found through the sub-buffer's parent arena and offset, written in queue order.
+class StrayWriteOp final : public Op {
+ public:
+  explicit StrayWriteOp(Stray where) : where_(where) {}
+  std::string type() const override { return "stray"; }
+  void forward(ExecContext& ctx) override {
+    if (where_ == Stray::BeforeOutput || where_ == Stray::PastOutput) write_beside(ctx, ctx.out(0), where_ == Stray::PastOutput);
+    if (where_ == Stray::BeforeParameter || where_ == Stray::PastParameter)
+      write_beside(ctx, ctx.in(0), where_ == Stray::PastParameter);
+  }
+  void backward(ExecContext& ctx) override {
+    if (where_ == Stray::BeforeGradient || where_ == Stray::PastGradient)
+      write_beside(ctx, ctx.grad_in(0), where_ == Stray::PastGradient);
+  }
+
+ private:
+  static void write_beside(ExecContext& ctx, cl_mem buffer, bool past) {
+    cl_mem parent = nullptr;
+    size_t offset = 0, bytes = 0;
+    clGetMemObjectInfo(buffer, CL_MEM_ASSOCIATED_MEMOBJECT, sizeof(parent), &parent, nullptr);
+    clGetMemObjectInfo(buffer, CL_MEM_OFFSET, sizeof(offset), &offset, nullptr);
+    clGetMemObjectInfo(buffer, CL_MEM_SIZE, sizeof(bytes), &bytes, nullptr);
+    BOOST_REQUIRE(parent != nullptr && offset >= sizeof(float));
+    const float one = 1.0f;
+    ctx.rt.upload(parent, &one, sizeof(one), past ? offset + bytes : offset - sizeof(float));
+  }
+  Stray where_;
+};
+
 }  // namespace
 
 BOOST_FIXTURE_TEST_SUITE(op_table, RecordLaunches)
@@ -153,6 +187,43 @@ BOOST_AUTO_TEST_CASE(guards_catch_an_out_of_bounds_kernel) {
       const std::string what = err.what();
       BOOST_TEST(what.find("op 'overrun'") != std::string::npos, what);
       BOOST_TEST(what.find("past the end of tensor 'y'") != std::string::npos, what);
+    }
+  }
+}
+
+// The guards sit before every tensor as well as past it, and around parameters and their
+// gradients too: one float written just before an output, or beside a parameter or its
+// gradient, is caught with the op and the tensor named; without a stray write the guarded run
+// passes and a parameter gradient no op writes reads 0.
+BOOST_AUTO_TEST_CASE(guards_catch_writes_before_a_tensor_and_beside_parameters) {
+  const std::vector<std::pair<Stray, std::string>> cases = {
+      {Stray::BeforeOutput, "before the start of tensor 'y'"},
+      {Stray::PastOutput, "past the end of tensor 'y'"},
+      {Stray::BeforeParameter, "before the start of parameter 'w'"},
+      {Stray::PastParameter, "past the end of parameter 'w'"},
+      {Stray::BeforeGradient, "before the start of the gradient of parameter 'w'"},
+      {Stray::PastGradient, "past the end of the gradient of parameter 'w'"},
+      {Stray::Nowhere, ""}};
+  for (const auto& [where, named] : cases) {
+    Graph g;
+    Tensor w = g.parameter("w", Shape{3, 5}, Init::uniform(0.5f));
+    Tensor y = g.activation("y", Shape{1});
+    g.add(std::make_unique<StrayWriteOp>(where), {w}, {y});
+    g.set_loss(y);
+    Executor ex(runtime(), g, guarded_options());
+    const std::vector<float> weights = random_floats(15, -1, 1, 3);
+    ex.set(w, weights);
+    try {
+      ex.forward();
+      ex.backward();
+      BOOST_TEST(named.empty(), "a write " << named << " went unnoticed");
+      BOOST_TEST(ex.get(w) == weights);
+      BOOST_TEST(ex.get_grad(w) == std::vector<float>(15, 0.0f));
+    } catch (const Error& err) {
+      const std::string what = err.what();
+      BOOST_TEST(!named.empty(), what);
+      BOOST_TEST(what.find("op 'stray'") != std::string::npos, what);
+      BOOST_TEST(what.find(named) != std::string::npos, what);
     }
   }
 }
