@@ -136,19 +136,33 @@ void register_grid_ops(std::vector<OpEntry>& table);
 OpEntry depth_loss_entry(GradientReducer* ranks = nullptr);
 
 // The free-space loss problems (op_table_ray_losses.cpp): dims N NeRFs, R rays, S samples;
-// the case of free_space_table_case, its values in the graph's input order, and the graph
-// (margin 0.05 from the first object NeRF; `behind` and `ranks` as free_space_loss takes them).
+// the case (variant 0 free_space_table_case, 1-3 free_space_random_case), its values in the
+// graph's input order, and the graph of the case (margin, behind and noise from it, from the
+// first object NeRF; `ranks` as free_space_loss takes it).
 FreeSpaceCase free_space_case(const OpShape& s);
 std::vector<std::vector<float>> free_space_values(const OpShape& s);
-OpGraph free_space_graph(Graph& g, const OpShape& s, float behind, GradientReducer* ranks);
+OpGraph free_space_graph(Graph& g, const OpShape& s, GradientReducer* ranks);
 void register_rank_ops(std::vector<OpEntry>& table);
 // The stand-in for a second rank that every graph of the table over ranks holds
 // (twin_ranks_reducer.hpp).
 GradientReducer& twin_ranks();
 
-// The render_composite problem at a shape (op_table_render.cpp): dims N NeRFs, R rays,
-// S samples; variant 0 default options, 1 the reference code's, 2 plain compositing.
-RenderRefInput render_table_case(const OpShape& s);
+// The render_composite problem at a shape (op_table_render.cpp states the variants) and the
+// seed of its loss's random targets (render_check.hpp).
+struct RenderTableCase {
+  RenderRefInput in;
+  unsigned targets_seed = 0;
+};
+RenderTableCase render_table_case(const OpShape& s);
+// render_composite of the case's inputs (a delta per NeRF and noise where the case has them)
+// with its options.
+struct RenderGraph {
+  Tensor raw, delta, z, noise;
+  RenderOutputs out;
+};
+RenderGraph render_table_graph(Graph& g, const RenderRefInput& in);
+// The seed of instance_points' case at a shape (rays_reference.hpp's check_instance_points).
+unsigned instance_points_seed(const OpShape& s);
 
 // The row count of the odd-size sweep: a prime, more than any work-group nova chooses, so
 // several groups and a partial last one on every device.

@@ -73,7 +73,7 @@ OpEntry free_space_over_ranks_entry() {
   OpEntry e;
   e.name = "free_space_loss_over_ranks";
   e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}, {{2, 9, 3}, 0, "2 NeRFs x 9 rays x 3"}};
-  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, 0.5f, &twin_ranks()); };
+  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, &twin_ranks()); };
   e.values = free_space_values;
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40 + double(s.dims[1]) * 16; };
   return e;

@@ -117,15 +117,7 @@ inline DeviceRender run_device_render(const RenderRefInput& in, const RenderTarg
                                           : g.input("delta", Shape{N, R, S});
   Tensor z = g.input("z", Shape{R, S});
   Tensor noise = in.noise.empty() ? Tensor{} : g.input("noise", Shape{N, R * S});
-  RenderOptions o;
-  o.rgb_sigmoid = in.rgb_sigmoid;
-  o.blend_sigmoid = in.blend_sigmoid;
-  o.hard_blend = in.hard_blend;
-  o.blend_eps = static_cast<float>(in.blend_eps);
-  o.alpha_full_sum = in.alpha_full_sum;
-  o.no_blend = in.no_blend;
-  o.nerf_depth = in.nerf_depth;
-  RenderOutputs out = render_composite(raw, delta, z, noise, o);
+  RenderOutputs out = render_composite(raw, delta, z, noise, render_options(in));
   std::vector<Tensor> outs = {out.rgb, out.nerf_rgb, out.mask, out.depth, out.acc};
   std::vector<const std::vector<double>*> targets = {&t.rgb, &t.nerf_rgb, &t.mask, &t.depth, &t.acc};
   if (in.nerf_depth) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "harness.hpp"
+#include "nova/render.hpp"
 
 namespace nova::test {
 
@@ -81,6 +82,19 @@ inline RenderRefOutput render_reference(const RenderRefInput& in) {
     }
   }
   return out;
+}
+
+// The device's options for the reference's conventions.
+inline RenderOptions render_options(const RenderRefInput& in) {
+  RenderOptions o;
+  o.rgb_sigmoid = in.rgb_sigmoid;
+  o.blend_sigmoid = in.blend_sigmoid;
+  o.hard_blend = in.hard_blend;
+  o.blend_eps = static_cast<float>(in.blend_eps);
+  o.alpha_full_sum = in.alpha_full_sum;
+  o.no_blend = in.no_blend;
+  o.nerf_depth = in.nerf_depth;
+  return o;
 }
 
 inline std::vector<float> to_float(const std::vector<double>& v) { return {v.begin(), v.end()}; }
