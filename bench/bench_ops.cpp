@@ -29,11 +29,12 @@ struct Row {
   double flops = 0;
 };
 
+// The shape of most FLOPs (of the largest product of dims for copies, which count none).
 const OpShape& largest(const OpEntry& e) {
-  const auto size = [](const OpShape& s) {
-    size_t n = 1;
-    for (size_t d : s.dims) n *= d;
-    return n;
+  const auto size = [&](const OpShape& s) {
+    double n = 1;
+    for (size_t d : s.dims) n *= double(d);
+    return e.flops && e.flops(s) > 0 ? e.flops(s) : n;
   };
   return *std::max_element(e.shapes.begin(), e.shapes.end(),
                            [&](const OpShape& a, const OpShape& b) { return size(a) < size(b); });
