@@ -47,22 +47,14 @@ HashCase hash_case(const OpShape& s) {
   const size_t which = s.dims.size() > 4 ? s.dims[4] : 0;
   if (which == 0) {
     const bool small = s.dims[3] < 8;
-    c.levels = small ? 3 : 4;
-    c.features = small ? 3 : 2;
-    c.log2_size = static_cast<int>(s.dims[3]);
-    c.min_resolution = small ? 2 : 3;
-    c.max_resolution = small ? 7 : 30;
+    c = small ? grid_config(3, 3, static_cast<int>(s.dims[3]), 2, 7) : grid_config(4, 2, static_cast<int>(s.dims[3]), 3, 30);
     return h;
   }
   if (which <= 20) {
     const size_t k = (which - 1) / 4;  // (D, time cap, box) of the five below
     static const std::array<std::pair<int, std::array<float, 3>>, 5> time_box = {
         std::pair<int, std::array<float, 3>>{0, {}}, {0, {}}, {3, {}}, {0, {1.4f, 0.8f, 1.1f}}, {3, {1.6f, 0.9f, 1.0f}}};
-    c.levels = 6;
-    c.features = 3;
-    c.log2_size = 10;
-    c.min_resolution = 2;
-    c.max_resolution = 40;
+    c = grid_config(6, 3, 10, 2, 40);
     c.bound = h.bound = 1.5f;
     c.time_max_resolution = time_box[k].first;
     c.axis_bound = time_box[k].second;
@@ -71,11 +63,7 @@ HashCase hash_case(const OpShape& s) {
     h.table_seed = 5 + unsigned(s.dims[2]);
     return h;
   }
-  c.levels = 3;
-  c.features = 2;
-  c.log2_size = 4;
-  c.min_resolution = 2;
-  c.max_resolution = 7;
+  c = grid_config(3, 2, 4, 2, 7);
   c.time_max_resolution = which >= 23 ? 2 : 0;
   c.extend = which == 24;
   h.position_seed = 9;

@@ -27,6 +27,7 @@ using namespace nova;
 using nova::test::check_gradients;
 using nova::test::expect_close;
 using nova::test::for_each_vertex;
+using nova::test::grid_config;
 using nova::test::hash_reference;
 using nova::test::OpUnderTest;
 using nova::test::random_floats;
@@ -120,12 +121,7 @@ BOOST_AUTO_TEST_CASE(extend_changes_only_points_outside_the_box) {
 
 BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
   // Two encodings of one table: its gradient is the sum of both (the second backward adds).
-  HashGridConfig c;
-  c.levels = 2;
-  c.features = 2;
-  c.log2_size = 4;
-  c.min_resolution = 3;
-  c.max_resolution = 5;
+  const HashGridConfig c = grid_config(2, 2, 4, 3, 5);
   const size_t rows = 19;
   for_each_backward([&](const std::string&) {
     check_gradients(
@@ -150,12 +146,7 @@ BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
 // and scaling table and targets by 2^-20 scales the gradient by exactly 2^-20 (the fixed-point scale
 // follows the gradient's size: nothing underflows).
 BOOST_AUTO_TEST_CASE(table_gradient_matches_float64_sums) {
-  HashGridConfig c;
-  c.levels = 4;
-  c.features = 2;
-  c.log2_size = 8;
-  c.min_resolution = 3;
-  c.max_resolution = 30;
+  const HashGridConfig c = grid_config(4, 2, 8, 3, 30);
   const size_t rows = 1031, dims = 3, outs = static_cast<size_t>(c.outputs());
   const auto pos = test_positions(rows, dims, 1.0f, 31);
   const auto table = random_floats(hash_grid_table_shape(c).numel(), -1, 1, 32);
