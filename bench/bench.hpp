@@ -13,6 +13,7 @@ using Args = std::vector<std::string>;
 
 int mlp(const Args& args);
 int render(const Args& args);
+int ops(const Args& args);  // the op table (tests/op_table.hpp, library nova_op_table)
 #ifdef NOVA_BENCH_IO
 int tradeoff(const Args& args);  // needs nova_io (scenes, metrics, the plot)
 int view(const Args& args);      // needs nova_io (the run's scene)

@@ -27,11 +27,11 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <random>
 #include <sstream>
 
 #include "bench.hpp"
 #include "composite_problem.hpp"
+#include "harness.hpp"
 #include "nova/executor.hpp"
 #include "nova/io/evaluation.hpp"
 #include "nova/io/image_io.hpp"
@@ -77,14 +77,6 @@ std::unique_ptr<MlpGraph> mlp_graph(size_t rows, int depth, int width) {
   return m;
 }
 
-std::vector<float> uniform(size_t n, float lo, float hi, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> d(lo, hi);
-  std::vector<float> v(n);
-  for (float& x : v) x = d(rng);
-  return v;
-}
-
 // Largest |a - ref| over the largest |ref|.
 double relative_error(const std::vector<float>& a, const std::vector<double>& ref) {
   double diff = 0, scale = 0;
@@ -100,7 +92,7 @@ double relative_error(const std::vector<float>& a, const std::vector<double>& re
 std::pair<double, double> mlp_error(Runtime& rt, size_t rows, int depth, int width) {
   auto m = mlp_graph(rows, depth, width);
   Executor ex(rt, m->g);
-  const auto x = uniform(rows * kIn, -1, 1, 3), t = uniform(rows * kOut, 0, 1, 4);
+  const auto x = test::random_floats(rows * kIn, -1, 1, 3), t = test::random_floats(rows * kOut, 0, 1, 4);
   ex.set(m->x, x);
   ex.set(m->target, t);
   ex.forward();
@@ -155,8 +147,8 @@ std::pair<double, double> mlp_error(Runtime& rt, size_t rows, int depth, int wid
 double mlp_speed(Runtime& rt, size_t rows, int depth, int width, int repeats) {
   auto m = mlp_graph(rows, depth, width);
   Executor ex(rt, m->g);
-  ex.set(m->x, uniform(rows * kIn, -1, 1, 5));
-  ex.set(m->target, uniform(rows * kOut, 0, 1, 6));
+  ex.set(m->x, test::random_floats(rows * kIn, -1, 1, 5));
+  ex.set(m->target, test::random_floats(rows * kOut, 0, 1, 6));
   const double secs = time_median(repeats, [&] {
     ex.forward();
     ex.backward();

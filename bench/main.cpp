@@ -16,6 +16,7 @@ const std::vector<Benchmark>& benchmarks() {
   static const std::vector<Benchmark> all = {
       {"mlp", "reference MLP forward / forward+backward, GEMMs beside a host BLAS", mlp},
       {"render", "compositing op forward / backward for 1 + K NeRFs beside a host loop", render},
+      {"ops", "every op of the op table (tests/op_table.hpp): ms forward, ms forward+backward, GFLOP/s", ops},
 #ifdef NOVA_BENCH_IO
       {"tradeoff", "trains a scene under several settings: PSNR against training time (CSV, PNG, speedup)", tradeoff},
       {"accuracy", "trains and evaluates a list of scenes (sets dev, test, real) with one configuration: PSNR / SSIM / time per scene and set (table, CSV, JSON, PNG)", accuracy},

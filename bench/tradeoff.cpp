@@ -2,13 +2,10 @@
 #include "tradeoff.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cctype>
 #include <cstdio>
 #include <set>
 #include <sstream>
-
-#include <opencv2/imgproc.hpp>
 
 #include "nova/error.hpp"
 #include "nova/gemm.hpp"
@@ -185,128 +182,20 @@ std::string csv_text(const std::vector<Curve>& curves) {
   return out;
 }
 
-
 Image8 plot(const std::vector<Series>& series, const std::string& title, double level,
             int width, int height) {
-  // Tableau 10, as BGR.
-  static const std::array<cv::Scalar, 10> colours = {
-      cv::Scalar(180, 119, 31), cv::Scalar(14, 127, 255), cv::Scalar(44, 160, 44), cv::Scalar(40, 39, 214),
-      cv::Scalar(189, 103, 148), cv::Scalar(75, 86, 140), cv::Scalar(194, 119, 227), cv::Scalar(127, 127, 127),
-      cv::Scalar(34, 189, 188), cv::Scalar(207, 190, 23)};
-  cv::Mat img(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
-  const int font = cv::FONT_HERSHEY_SIMPLEX;
-  const cv::Scalar black(0, 0, 0), grid(225, 225, 225);
-  const int left = 80, right = width - 30, top = 50, bottom = height - 70;
-
-  double x1 = 0, y0 = INFINITY, y1 = -INFINITY;
-  for (const Series& s : series)
-    for (auto [x, y] : s.xy) {
-      if (!std::isfinite(x) || !std::isfinite(y)) continue;
-      x1 = std::max(x1, x);
-      y0 = std::min(y0, y);
-      y1 = std::max(y1, y);
-    }
-  if (std::isfinite(level)) y0 = std::min(y0, level), y1 = std::max(y1, level);
-  if (!std::isfinite(y0)) y0 = 0, y1 = 1;
-  if (!(x1 > 0)) x1 = 1;
-  const double pad = std::max(0.5, (y1 - y0) * 0.05);
-  y0 -= pad;
-  y1 += pad;
-  double xstep = 1, ystep = 1;
-  const std::vector<double> xt = axis_ticks(0, x1, 6, &xstep), yt = axis_ticks(y0, y1, 6, &ystep);
-  x1 = std::max(x1, xt.back());
-  y0 = std::min(y0, yt.front());
-  y1 = std::max(y1, yt.back());
-  const auto px = [&](double x) { return static_cast<int>(std::lround(left + (right - left) * x / x1)); };
-  const auto py = [&](double y) { return static_cast<int>(std::lround(bottom - (bottom - top) * (y - y0) / (y1 - y0))); };
-
-  for (double x : xt) {
-    cv::line(img, {px(x), top}, {px(x), bottom}, grid, 1);
-    cv::line(img, {px(x), bottom}, {px(x), bottom + 5}, black, 1);
-    const std::string t = axis_tick_text(x, xstep);
-    int base = 0;
-    const cv::Size sz = cv::getTextSize(t, font, 0.45, 1, &base);
-    cv::putText(img, t, {px(x) - sz.width / 2, bottom + 22}, font, 0.45, black, 1, cv::LINE_AA);
-  }
-  for (double y : yt) {
-    cv::line(img, {left, py(y)}, {right, py(y)}, grid, 1);
-    cv::line(img, {left - 5, py(y)}, {left, py(y)}, black, 1);
-    const std::string t = axis_tick_text(y, ystep);
-    int base = 0;
-    const cv::Size sz = cv::getTextSize(t, font, 0.45, 1, &base);
-    cv::putText(img, t, {left - 9 - sz.width, py(y) + sz.height / 2}, font, 0.45, black, 1, cv::LINE_AA);
-  }
-  cv::rectangle(img, {left, top}, {right, bottom}, black, 1);
-  {
-    int base = 0;
-    const std::string xl = "training time (s, evaluation excluded)";
-    const cv::Size sz = cv::getTextSize(xl, font, 0.55, 1, &base);
-    cv::putText(img, xl, {(left + right - sz.width) / 2, height - 22}, font, 0.55, black, 1, cv::LINE_AA);
-    const std::string yl = "PSNR (dB)";
-    const cv::Size ys = cv::getTextSize(yl, font, 0.55, 1, &base);
-    cv::Mat label(ys.height + base + 4, ys.width + 4, CV_8UC3, cv::Scalar(255, 255, 255));
-    cv::putText(label, yl, {2, ys.height + 1}, font, 0.55, black, 1, cv::LINE_AA);
-    cv::Mat rotated;
-    cv::rotate(label, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
-    const int ry = std::max(0, (top + bottom - rotated.rows) / 2);
-    if (ry + rotated.rows <= height && 8 + rotated.cols <= width) rotated.copyTo(img(cv::Rect(8, ry, rotated.cols, rotated.rows)));
-    const cv::Size ts = cv::getTextSize(title, font, 0.6, 1, &base);
-    cv::putText(img, title, {std::max(4, (width - ts.width) / 2), 30}, font, 0.6, black, 1, cv::LINE_AA);
-  }
-  if (std::isfinite(level)) {
-    for (int x = left; x < right; x += 12) cv::line(img, {x, py(level)}, {std::min(x + 6, right), py(level)}, black, 1);
-  }
-
-  for (size_t i = 0; i < series.size(); ++i) {
-    const cv::Scalar c = colours[i % colours.size()];
-    std::vector<cv::Point> pts;
-    for (auto [x, y] : series[i].xy)
-      if (std::isfinite(x) && std::isfinite(y)) pts.emplace_back(px(x), py(y));
-    if (pts.size() > 1) cv::polylines(img, pts, false, c, 2, cv::LINE_AA);
-    for (const cv::Point& p : pts) {
-      if (i / colours.size() % 2 == 0)
-        cv::circle(img, p, 4, c, cv::FILLED, cv::LINE_AA);
-      else  // an eleventh series and on: square markers
-        cv::rectangle(img, {p.x - 4, p.y - 4}, {p.x + 4, p.y + 4}, c, cv::FILLED);
-    }
-  }
-  // Legend, bottom right (the curves rise to the top left), with the level's dashed line.
-  const std::string level_label = std::isfinite(level) ? "equal-PSNR level " + fmt(level, 2) + " dB" : "";
-  int lw = 0, lh = 0, base = 0;
-  for (const Series& s : series) {
-    const cv::Size sz = cv::getTextSize(s.label, font, 0.45, 1, &base);
-    lw = std::max(lw, sz.width);
-    lh = std::max(lh, sz.height + base);
-  }
-  if (!level_label.empty()) lw = std::max(lw, cv::getTextSize(level_label, font, 0.45, 1, &base).width);
-  const int rows = static_cast<int>(series.size()) + (level_label.empty() ? 0 : 1);
-  const int row = std::max(lh, 12) + 6, bw = lw + 50, bh = row * rows + 10;
-  const int bx = right - bw - 10, by = bottom - bh - 10;
-  if (!series.empty() && bx > left && by > top) {
-    cv::rectangle(img, {bx, by}, {bx + bw, by + bh}, cv::Scalar(255, 255, 255), cv::FILLED);
-    cv::rectangle(img, {bx, by}, {bx + bw, by + bh}, cv::Scalar(160, 160, 160), 1);
-    for (size_t i = 0; i < series.size(); ++i) {
-      const cv::Scalar c = colours[i % colours.size()];
-      const int y = by + 5 + row * static_cast<int>(i) + row / 2;
-      cv::line(img, {bx + 8, y}, {bx + 36, y}, c, 2, cv::LINE_AA);
-      cv::circle(img, {bx + 22, y}, 4, c, cv::FILLED, cv::LINE_AA);
-      cv::putText(img, series[i].label, {bx + 44, y + lh / 2 - base}, font, 0.45, black, 1, cv::LINE_AA);
-    }
-    if (!level_label.empty()) {
-      const int y = by + 5 + row * static_cast<int>(series.size()) + row / 2;
-      for (int x = bx + 8; x < bx + 36; x += 12) cv::line(img, {x, y}, {std::min(x + 6, bx + 36), y}, black, 1);
-      cv::putText(img, level_label, {bx + 44, y + lh / 2 - base}, font, 0.45, black, 1, cv::LINE_AA);
-    }
-  }
-  Image8 out(width, height, 3);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const cv::Vec3b v = img.at<cv::Vec3b>(y, x);
-      out.at(x, y, 0) = v[2];
-      out.at(x, y, 1) = v[1];
-      out.at(x, y, 2) = v[0];
-    }
-  return out;
+  std::vector<ScatterGroup> curves;
+  for (const Series& s : series) curves.push_back({s.label, s.xy, {}});
+  XYChart chart;
+  chart.title = title;
+  chart.x_label = "training time (s, evaluation excluded)";
+  chart.y_label = "PSNR (dB)";
+  chart.lines = true;
+  chart.marker = 4;
+  chart.legend_bottom = true;  // the curves rise to the top left
+  chart.level = level;
+  chart.level_label = "equal-PSNR level " + fmt(level, 2) + " dB";
+  return plot_xy(curves, chart, width, height);
 }
 
 }  // namespace nova::tradeoff

@@ -40,6 +40,30 @@ inline FreeSpaceCase free_space_table_case(size_t N, size_t R, size_t S) {
   return f;
 }
 
+// The op's own cases (test_free_space_loss_op.cpp, and the op table's shapes of the same size):
+// sigma in [0.3, 4] (kept 0.3 from the ReLU kink), a delta per NeRF, every sixth ray invalid,
+// 60% of the masks 1; `noise` adds density noise in [-0.1, 0.1].
+inline FreeSpaceCase free_space_random_case(size_t N, size_t R, size_t S, bool noise, unsigned seed) {
+  FreeSpaceCase f;
+  f.N = N, f.R = R, f.S = S;
+  f.raw = random_floats(N * R * S * f.C, -1, 1, seed);
+  const auto sig = random_floats(N * R * S, 0.3f, 4.0f, seed + 1);
+  for (size_t e = 0; e < N * R * S; ++e) f.raw[e * f.C + 3] = sig[e];
+  f.delta = random_floats(N * R * S, 0.02f, 0.2f, seed + 2);
+  for (size_t r = 0; r < R; ++r)
+    for (size_t i = 0; i < S; ++i) f.z.push_back((i + 0.5f) / S);
+  f.depth = random_floats(R, 0.2f, 0.9f, seed + 3);
+  f.target = random_floats(R, -3.0f, -0.5f, seed + 4);
+  f.valid.assign(R, 1.0f);
+  for (size_t r = 0; r < R; r += 6) f.valid[r] = 0.0f;
+  f.masks = random_floats(N * R, 0, 1, seed + 5);
+  for (float& m : f.masks) m = m < 0.4f ? 0.0f : 1.0f;
+  if (noise) {
+    f.noise = random_floats(N * R * S, -0.1f, 0.1f, seed + 6);
+  }
+  return f;
+}
+
 inline double free_space_reference(const FreeSpaceCase& f, const std::vector<float>& raw) {
   // Least-squares fit depth ~ a + b target over the valid background rays (masks row 0).
   double n = 0, sp = 0, st = 0;

@@ -3,7 +3,6 @@
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 #include <memory>
-#include <random>
 #include <sstream>
 
 #include "nova/ops.hpp"
@@ -20,16 +19,6 @@ ExecutorOptions guarded_options() {
   o.guard_bytes = 1024;  // 256 floats: past any tile or vector width a kernel could overrun
   return o;
 }
-
-std::vector<float> random_floats(size_t n, float lo, float hi, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(lo, hi);
-  std::vector<float> v(n);
-  for (float& x : v) x = u(rng);
-  return v;
-}
-
-std::vector<double> to_double(const std::vector<float>& v) { return {v.begin(), v.end()}; }
 
 namespace {
 // |a - e| / (atol + rtol |e|); an exact match is 0 even with zero tolerances, NaN is infinite.
@@ -127,15 +116,6 @@ std::vector<float> run_forward(const BuildFn& build, const std::vector<std::vect
   for (size_t i = 0; i < values.size(); ++i) ex.set(op.inputs[i], values[i]);
   ex.forward();
   return ex.get(op.output);
-}
-
-double activation_reference(Activation a, double x) {
-  switch (a) {
-    case Activation::ReLU: return x > 0 ? x : 0;
-    case Activation::Sigmoid: return 1 / (1 + std::exp(-x));
-    case Activation::Softplus: return std::log1p(std::exp(x));
-    default: return x;
-  }
 }
 
 }  // namespace nova::test

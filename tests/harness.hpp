@@ -1,6 +1,9 @@
 #pragma once
 // The op test harness: a runtime per process, random data, comparisons against float64
 // host references with stated tolerances, and finite-difference gradient checks.
+// random_floats, to_double and activation_reference (harness_values.cpp) need no Boost: the
+// op table's library (nova_op_table, which nova-bench links) takes them; the rest is
+// harness.cpp's, in the test binary only.
 #include <functional>
 #include <string>
 #include <vector>

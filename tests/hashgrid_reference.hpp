@@ -12,6 +12,18 @@
 
 namespace nova::test {
 
+// A grid of `levels` levels of `features` floats over 2^log2_size table entries per level,
+// from min_res to max_res cells per dimension (the rest as HashGridConfig's defaults).
+inline HashGridConfig grid_config(int levels, int features, int log2_size, int min_res, int max_res) {
+  HashGridConfig c;
+  c.levels = levels;
+  c.features = features;
+  c.log2_size = log2_size;
+  c.min_resolution = min_res;
+  c.max_resolution = max_res;
+  return c;
+}
+
 // Every vertex a float64 evaluation of the encoding reads: visit(row, level, table row,
 // weight) for each corner of each level of each of `rows` positions [M, D] (one network).
 template <class Visit>

@@ -1,7 +1,6 @@
 #include "op_harness.hpp"
 
 #include <boost/test/unit_test.hpp>
-#include <chrono>
 #include <cxxabi.h>
 #include <filesystem>
 #include <fstream>
@@ -18,34 +17,6 @@ namespace nova::test {
 
 namespace {
 
-// The graph of an entry ready to run: outputs kept, and the loss the harness differentiates.
-struct Built {
-  Graph g;
-  OpGraph op;
-  std::vector<Tensor> targets;  // one per output when the harness built the loss
-};
-
-std::unique_ptr<Built> build(const OpEntry& e, const OpShape& s) {
-  auto b = std::make_unique<Built>();
-  b->op = e.build(b->g, s);
-  for (const Tensor& t : b->op.outputs) b->g.keep(t);
-  bool any_grad = false;
-  for (const Tensor& t : b->op.inputs) any_grad = any_grad || t.info().requires_grad;
-  if (b->op.loss.valid()) {
-    b->g.set_loss(b->op.loss);
-  } else if (any_grad) {
-    std::vector<Tensor> terms;
-    for (size_t k = 0; k < b->op.outputs.size(); ++k) {
-      const Tensor& out = b->op.outputs[k];
-      b->targets.push_back(b->g.input("target." + std::to_string(k), out.shape()));
-      terms.push_back(mse(out, b->targets.back()));
-    }
-    b->g.set_loss(terms.size() == 1 ? terms[0]
-                                    : weighted_sum(terms, std::vector<float>(terms.size(), 1.0f)));
-  }
-  return b;
-}
-
 std::string demangled(const std::type_info& t) {
   int status = 0;
   std::unique_ptr<char, void (*)(void*)> name(abi::__cxa_demangle(t.name(), nullptr, nullptr, &status),
@@ -58,20 +29,21 @@ std::string demangled(const std::type_info& t) {
 }  // namespace
 
 void check_entry(const OpEntry& e, const OpShape& s) {
-  if (e.check) {
-    e.check(s);
+  const ShapeSetup setup(e, s, runtime());
+  if (!setup.skipped().empty()) {
+    BOOST_TEST_MESSAGE(e.name << " " << s.label << ": " << setup.skipped());
     return;
   }
-  const auto values = e.values(s);
-  auto b = build(e, s);
-  BOOST_REQUIRE_EQUAL(b->op.inputs.size(), values.size());
-  Executor ex(runtime(), b->g, guarded_options());
-  for (size_t i = 0; i < values.size(); ++i) ex.set(b->op.inputs[i], values[i]);
-  OpCase c{s, values, {}, {}, {}};
-  for (size_t k = 0; k < b->targets.size(); ++k) {
-    c.targets.push_back(random_floats(b->targets[k].shape().numel(), -1.0f, 1.0f, 7 + unsigned(k)));
-    ex.set(b->targets[k], c.targets.back());
+  if (const auto own = own_checks().find(e.name); own != own_checks().end()) {
+    own->second(s);
+    return;
   }
+  BOOST_REQUIRE_MESSAGE(e.reference, e.name << " has neither a float64 reference nor a check of its own (op_table_checks.cpp)");
+  const auto values = e.values(s);
+  auto b = build_entry(e, s);
+  Executor ex(runtime(), b->g, guarded_options());
+  OpCase c{s, values, {}, {}, {}};
+  c.targets = set_entry_inputs(ex, *b, values);
   ex.forward();
   for (const Tensor& t : b->op.outputs) c.outputs.push_back(ex.get(t));
   for (size_t k = 0; k < b->targets.size(); ++k) c.upstream.push_back(mse_upstream(c.outputs[k], c.targets[k]));
@@ -143,28 +115,6 @@ std::set<std::string> library_op_classes() {
   for (const std::string& c : ops)
     if (!bases.count(c)) concrete.insert(c);
   return concrete;
-}
-
-OpTimingResult time_entry(const OpEntry& e, const OpShape& s, int reps) {
-  const auto values = e.values(s);
-  auto b = build(e, s);
-  Runtime& rt = runtime();
-  Executor ex(rt, b->g);
-  for (size_t i = 0; i < values.size(); ++i) ex.set(b->op.inputs[i], values[i]);
-  for (size_t k = 0; k < b->targets.size(); ++k)
-    ex.set(b->targets[k], random_floats(b->targets[k].shape().numel(), -1.0f, 1.0f, 7 + unsigned(k)));
-  const bool backward = b->g.loss().valid();
-  const auto run = [&] {
-    ex.forward();
-    if (backward) ex.backward();
-  };
-  run();
-  rt.finish();
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < reps; ++i) run();
-  rt.finish();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return {seconds / std::max(reps, 1), e.flops ? e.flops(s) : 0.0};
 }
 
 }  // namespace nova::test

@@ -2,7 +2,9 @@
 // The one harness of the op table (op_table.hpp): runs an entry at a shape against its
 // float64 reference and checks its gradients, on guarded executors (every op is checked not
 // to write outside its tensors); finds the op classes an entry builds and those the library
-// defines; times an entry for the timing mode.
+// defines. Timing the table is nova-bench's (`nova-bench ops`).
+#include <functional>
+#include <map>
 #include <set>
 #include <string>
 
@@ -17,8 +19,14 @@ struct RecordLaunches {
 };
 
 // Forward against the reference, the gradient against its float64 derivative, central
-// differences where the entry is differentiable (or the entry's own check).
+// differences where the entry is differentiable (or the entry's own check); a shape the
+// device cannot run (OpEntry::prepare) is skipped with a message.
 void check_entry(const OpEntry& entry, const OpShape& shape);
+
+// Checks of their own of the entries without a `reference`, by entry name
+// (op_table_checks.cpp); each builds its executors with guarded_options().
+using OwnCheck = std::function<void(const OpShape&)>;
+const std::map<std::string, OwnCheck>& own_checks();
 
 // Op classes (unqualified C++ class names) of the nodes of the graph `entry` builds at `shape`.
 std::set<std::string> op_classes_built(const OpEntry& entry, const OpShape& shape);
@@ -26,13 +34,5 @@ std::set<std::string> op_classes_built(const OpEntry& entry, const OpShape& shap
 // Every concrete op class the library defines: classes of host/ and include/nova/ deriving
 // (directly or through a base) from nova::Op, parsed from the sources.
 std::set<std::string> library_op_classes();
-
-struct OpTimingResult {
-  double seconds = 0;  // per forward + backward, mean over the timed runs
-  double flops = 0;    // per forward + backward (OpEntry::flops)
-};
-// Runs the entry's graph forward + backward `reps` times (after one untimed run) and returns
-// the mean time of one.
-OpTimingResult time_entry(const OpEntry& entry, const OpShape& shape, int reps);
 
 }  // namespace nova::test

@@ -3,8 +3,10 @@
 // float64 host reference, the shapes to run it at (odd sizes: no multiple of a work-group or
 // tile, and 1-row cases), tolerances with their reasons, and a FLOP count. One harness
 // (op_harness.hpp) checks every entry; tests/test_op_table.cpp also fails for an op class of
-// host/ that no entry builds.
+// host/ that no entry builds. The table needs no Boost (library nova_op_table): the test
+// binary checks it, and `nova-bench ops` times it (bench/bench_ops.cpp).
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,7 +14,9 @@
 #include "free_space_reference.hpp"
 #include "harness.hpp"
 #include "nova/distributed.hpp"
+#include "nova/executor.hpp"
 #include "nova/graph.hpp"
+#include "render_reference.hpp"
 
 namespace nova::test {
 
@@ -76,14 +80,47 @@ struct OpEntry {
   // differentiable or its gradient is deliberately not the derivative (gradient_gate).
   std::optional<GradCheckOptions> fd;
   size_t fd_max_rows = 64;
-  // A check of its own instead of the generic forward and gradient (ops whose reference runs
-  // a whole problem: render_composite, free_space_loss); it must build executors with
-  // guarded_options().
-  std::function<void(const OpShape&)> check;
+  // Without `reference`: the entry's reference runs a whole problem (render_composite,
+  // free_space_loss), and the test binary checks it with a check of its own, found by the
+  // entry's name (op_table_checks.cpp).
   // Floating-point operations of one forward + backward at the shape (an estimate of the
-  // arithmetic the kernels do; 0 for copies), for the timing mode.
+  // arithmetic the kernels do; 0 for copies), for `nova-bench ops`.
   std::function<double(const OpShape&)> flops;
+  // Where a shape needs the process set up before its executors are built (an environment
+  // choice such as NOVA_HASH_BACKWARD) or a device feature: sets it up and returns "", or
+  // returns why the device cannot run the shape (it is skipped). `restore` undoes the set-up.
+  std::function<std::string(const OpShape&, const Runtime&)> prepare;
+  std::function<void()> restore;
 };
+
+// An entry's `prepare` for one shape, undone when it goes; skipped() says why the device
+// cannot run the shape, empty when it can.
+class ShapeSetup {
+ public:
+  ShapeSetup(const OpEntry& entry, const OpShape& shape, const Runtime& rt);
+  ~ShapeSetup();
+  ShapeSetup(const ShapeSetup&) = delete;
+  ShapeSetup& operator=(const ShapeSetup&) = delete;
+  const std::string& skipped() const { return skipped_; }
+
+ private:
+  const OpEntry& entry_;
+  std::string skipped_;
+  bool prepared_ = false;
+};
+
+// An entry's graph ready to run: its outputs kept and, where it has inputs to differentiate
+// and no loss of its own, loss = sum_k mse(outputs[k], targets[k]).
+struct BuiltEntry {
+  Graph g;
+  OpGraph op;
+  std::vector<Tensor> targets;
+};
+std::unique_ptr<BuiltEntry> build_entry(const OpEntry& entry, const OpShape& shape);
+// Sets the entry's input values and random targets (uniform in [-1, 1], seeds 7, 8, ...) on
+// an executor of the built graph; returns the targets.
+std::vector<std::vector<float>> set_entry_inputs(Executor& ex, const BuiltEntry& built,
+                                                 const std::vector<std::vector<float>>& values);
 
 // Every entry, in registration order (one function per family).
 const std::vector<OpEntry>& op_table();
@@ -99,12 +136,33 @@ void register_grid_ops(std::vector<OpEntry>& table);
 OpEntry depth_loss_entry(GradientReducer* ranks = nullptr);
 
 // The free-space loss problems (op_table_ray_losses.cpp): dims N NeRFs, R rays, S samples;
-// the case of free_space_table_case, its values in the graph's input order, and the graph
-// (margin 0.05 from the first object NeRF; `behind` and `ranks` as free_space_loss takes them).
+// the case (variant 0 free_space_table_case, 1-3 free_space_random_case), its values in the
+// graph's input order, and the graph of the case (margin, behind and noise from it, from the
+// first object NeRF; `ranks` as free_space_loss takes it).
 FreeSpaceCase free_space_case(const OpShape& s);
 std::vector<std::vector<float>> free_space_values(const OpShape& s);
-OpGraph free_space_graph(Graph& g, const OpShape& s, float behind, GradientReducer* ranks);
+OpGraph free_space_graph(Graph& g, const OpShape& s, GradientReducer* ranks);
 void register_rank_ops(std::vector<OpEntry>& table);
+// The stand-in for a second rank that every graph of the table over ranks holds
+// (twin_ranks_reducer.hpp).
+GradientReducer& twin_ranks();
+
+// The render_composite problem at a shape (op_table_render.cpp states the variants) and the
+// seed of its loss's random targets (render_check.hpp).
+struct RenderTableCase {
+  RenderRefInput in;
+  unsigned targets_seed = 0;
+};
+RenderTableCase render_table_case(const OpShape& s);
+// render_composite of the case's inputs (a delta per NeRF and noise where the case has them)
+// with its options.
+struct RenderGraph {
+  Tensor raw, delta, z, noise;
+  RenderOutputs out;
+};
+RenderGraph render_table_graph(Graph& g, const RenderRefInput& in);
+// The seed of instance_points' case at a shape (rays_reference.hpp's check_instance_points).
+unsigned instance_points_seed(const OpShape& s);
 
 // The row count of the odd-size sweep: a prime, more than any work-group nova chooses, so
 // several groups and a partial last one on every device.

@@ -199,26 +199,47 @@ OpEntry linear_entry(bool with_bias) {
   return e;
 }
 
+// concat (variant 0, dims rows, A, B: [rows, A] beside [rows, B]) and stack (variant 1, dims
+// M, C, B: [M, C] on top of [B, M, C], the static and object NeRFs' outputs for
+// render_composite), both copies of their parts: exact forward, the upstream gradient split.
 OpEntry concat_entry() {
   OpEntry e;
   e.name = "concat";
-  e.shapes = {{{kOddRows, 3, 5}, 0, "1009 x (3 + 5)"}, {{13, 3, 5}, 0, "13 x (3 + 5)"}, {{1, 3, 5}, 0, "1 x (3 + 5)"}};
+  e.shapes = {{{kOddRows, 3, 5}, 0, "1009 x (3 + 5)"},
+              {{13, 3, 5}, 0, "13 x (3 + 5)"},
+              {{1, 3, 5}, 0, "1 x (3 + 5)"},
+              {{6, 5, 2}, 1, "stack [6, 5] on [2, 6, 5]"}};
   e.build = [](Graph& g, const OpShape& s) {
+    if (s.variant == 1) {
+      Tensor a = g.input("a", Shape{s.dims[0], s.dims[1]}, true);
+      Tensor b = g.input("b", Shape{s.dims[2], s.dims[0], s.dims[1]}, true);
+      return OpGraph{{a, b}, {stack({a, b})}, {}};
+    }
     Tensor a = g.input("a", Shape{s.dims[0], s.dims[1]}, true), b = g.input("b", Shape{s.dims[0], s.dims[2]}, true);
     return OpGraph{{a, b}, {concat({a, b})}, {}};
   };
   e.values = [](const OpShape& s) {
+    if (s.variant == 1)
+      return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -1, 1, 1),
+                                             random_floats(s.dims[2] * s.dims[0] * s.dims[1], -1, 1, 2)};
     return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -1, 1, 121),
                                            random_floats(s.dims[0] * s.dims[2], -1, 1, 122)};
   };
+  // Columns [0, A) of every row, or [A, A + B); a stack's parts are one leading block each.
   const auto split = [](const OpShape& s, const auto& full, int part) {
-    const size_t A = s.dims[1], W = s.dims[1] + s.dims[2];
+    const size_t rows = s.variant == 1 ? 1 : s.dims[0];
+    const size_t A = s.variant == 1 ? s.dims[0] * s.dims[1] : s.dims[1], W = full.size() / rows;
     std::vector<double> v;
-    for (size_t r = 0; r < s.dims[0]; ++r)
+    for (size_t r = 0; r < rows; ++r)
       for (size_t c = part ? A : 0; c < (part ? W : A); ++c) v.push_back(full[r * W + c]);
     return v;
   };
   e.reference = [](const OpCase& c) {
+    if (c.shape.variant == 1) {
+      std::vector<double> ref = to_double(c.values[0]);
+      ref.insert(ref.end(), c.values[1].begin(), c.values[1].end());
+      return std::vector<Expected>{{ref, {0, 0}}};  // a copy: exact
+    }
     std::vector<double> ref;
     for (size_t r = 0; r < c.shape.dims[0]; ++r) {
       for (size_t k = 0; k < c.shape.dims[1]; ++k) ref.push_back(c.values[0][r * c.shape.dims[1] + k]);
@@ -235,26 +256,61 @@ OpEntry concat_entry() {
   return e;
 }
 
+// Gate values 0, 1 and soft ones, row by row.
+std::vector<float> mixed_gate(size_t n, unsigned seed) {
+  auto g = random_floats(n, 0, 1, seed);
+  for (float& v : g) v = v < 0.35f ? 0.0f : v < 0.7f ? 1.0f : v;
+  return g;
+}
+
+// The forward is a copy (exact). Variant 0: the gated gradient against the device's upstream
+// (harness tolerance). Variant 1: x is also read ungated, loss = mse(y, t) + mse(x, t2), so
+// the gate's backward accumulates into x's gradient: one float32 product per element and one
+// addition, rtol 1e-5 with atol 1e-7. Variant 2: an all-ones gate is the identity, so central
+// differences (harness default) apply; elsewhere the backward is deliberately not the
+// forward's derivative and no finite differences run.
 OpEntry gradient_gate_entry() {
   OpEntry e;
   e.name = "gradient_gate";
-  // dims: rays R, rows per ray G, cols C, gate rows, gate row. Not differentiated by finite
-  // differences: the backward is deliberately not the forward's derivative.
-  e.shapes = {{{kOddRows, 3, 5, 2, 1}, 0, "1009 x 3 rows x 5, gate row 1 of 2"}, {{1, 1, 3, 1, 0}, 0, "1 x 1 x 3"}};
+  // dims: rays R, rows per ray G, cols C, gate rows, gate row.
+  e.shapes = {{{kOddRows, 3, 5, 2, 1}, 0, "1009 x 3 rows x 5, gate row 1 of 2"},
+              {{1, 1, 3, 1, 0}, 0, "1 x 1 x 3"},
+              {{13, 3, 5, 2, 1}, 1, "13 x 3 rows x 5, gate row 1 of 2, x also read ungated"},
+              {{7, 4, 3, 1, 0}, 2, "7 x 4 rows x 3, all-ones gate", GradCheckOptions{}}};
   e.build = [](Graph& g, const OpShape& s) {
-    Tensor x = g.input("x", Shape{s.dims[0] * s.dims[1], s.dims[2]}, true), gate = g.input("gate", Shape{s.dims[3], s.dims[0]});
-    return OpGraph{{x, gate}, {gradient_gate(x, gate, s.dims[4])}, {}};
+    const Shape rows{s.dims[0] * s.dims[1], s.dims[2]};
+    Tensor x = g.input("x", rows, true), gate = g.input("gate", Shape{s.dims[3], s.dims[0]});
+    Tensor y = gradient_gate(x, gate, s.dims[4]);
+    if (s.variant != 1) return OpGraph{{x, gate}, {y}, {}};
+    Tensor t = g.input("t", rows), t2 = g.input("t2", rows);
+    return OpGraph{{x, gate, t, t2}, {y}, weighted_sum({mse(y, t), mse(x, t2)}, {1.0f, 1.0f})};
   };
   e.values = [](const OpShape& s) {
-    auto gate = random_floats(s.dims[3] * s.dims[0], 0, 1, 126);
+    const size_t R = s.dims[0], n = R * s.dims[1] * s.dims[2];
+    if (s.variant == 1)
+      return std::vector<std::vector<float>>{random_floats(n, -1, 1, 1), mixed_gate(s.dims[3] * R, 4),
+                                             random_floats(n, -1, 1, 2), random_floats(n, -1, 1, 3)};
+    if (s.variant == 2)
+      return std::vector<std::vector<float>>{random_floats(n, -1, 1, 5), std::vector<float>(s.dims[3] * R, 1.0f)};
+    auto gate = random_floats(s.dims[3] * R, 0, 1, 126);
     for (float& v : gate) v = v < 0.5f ? 0.0f : v;
-    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1] * s.dims[2], -1, 1, 124), gate};
+    return std::vector<std::vector<float>>{random_floats(n, -1, 1, 124), gate};
   };
   e.reference = [](const OpCase& c) { return std::vector<Expected>{{to_double(c.values[0]), {0, 0}}}; };  // a copy
   e.gradient = [](const OpCase& c) {
     const size_t R = c.shape.dims[0], per_ray = c.shape.dims[1] * c.shape.dims[2], row = c.shape.dims[4];
-    std::vector<double> dx(c.values[0].size());
-    for (size_t i = 0; i < dx.size(); ++i) dx[i] = c.upstream[0][i] * c.values[1][row * R + i / per_ray];
+    const auto& x = c.values[0];
+    std::vector<double> dx(x.size());
+    for (size_t i = 0; i < dx.size(); ++i) {
+      const double gate = c.values[1][row * R + i / per_ray];
+      if (c.shape.variant != 1) {
+        dx[i] = c.upstream[0][i] * gate;
+        continue;
+      }
+      const double n = static_cast<double>(x.size());
+      dx[i] = 2.0 * (double(x[i]) - c.values[2][i]) / n * gate + 2.0 * (double(x[i]) - c.values[3][i]) / n;
+    }
+    if (c.shape.variant == 1) return std::vector<Expected>{{dx, {1e-7, 1e-5}}, {}, {}, {}};
     return std::vector<Expected>{grad_expected(dx), {}};
   };
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]); };

@@ -1,16 +1,17 @@
 // The op table's grid ops: hash_encoding (both table-gradient summations) and the packing ops
 // (pack_occupied, gather_rows, scatter_rows) over 1009 rows per batch (several work-groups, a
 // partial last one) and small cases.
-#include <boost/test/unit_test.hpp>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "hashgrid_reference.hpp"
 #include "nova/hash_grid.hpp"
 #include "nova/occupancy.hpp"
 #include "nova/ops.hpp"
-#include "op_harness.hpp"
 #include "op_table.hpp"
 #include "packing_reference.hpp"
 
@@ -18,29 +19,95 @@ namespace nova::test {
 
 namespace {
 
-// dims[3] 8: levels of 3 to 30 cells over a 2^8 table, the coarse levels dense, the fine
-// ones hashed, so that hashed entries collect many rows each. dims[3] 4: 3 levels of 2 to 7
-// cells with 3 features over a 2^4 table, 144 entries per network: a table whose size is no
-// multiple of a work-group (the atomic backward's conversion runs over the table).
-HashGridConfig hash_config(const OpShape& s) {
-  HashGridConfig c;
-  const bool small = s.dims[3] < 8;
-  c.levels = small ? 3 : 4;
-  c.features = small ? 3 : 2;
-  c.log2_size = static_cast<int>(s.dims[3]);
-  c.min_resolution = small ? 2 : 3;
-  c.max_resolution = small ? 7 : 30;
-  return c;
+// A configuration of the encoding with the bound and seeds of its positions and table.
+struct HashCase {
+  HashGridConfig config;
+  float bound = 1.0f;  // positions drawn in [-bound, bound] (test_positions)
+  unsigned position_seed = 31, table_seed = 32;
+};
+
+// dims[4] picks the case. 0: dims[3] 8: levels of 3 to 30 cells over a 2^8 table, the coarse
+// levels dense, the fine ones hashed, so that hashed entries collect many rows each; dims[3]
+// 4: 3 levels of 2 to 7 cells with 3 features over a 2^4 table, 144 entries per network: a
+// table whose size is no multiple of a work-group (the atomic backward's conversion runs over
+// the table).
+// 1-20 (test_hashgrid's forward cases): levels from 2 to 40 cells with 3 features over a 2^10
+// table, positions in +-1.5 (bound 1.5): 3-D levels up to res 9 are dense (10^3 <= 1024),
+// finer ones hashed; 4-D goes hashed sooner (res 5: 6^4 > 1024). Time (the 4th coordinate)
+// as space, then capped at 3 cells: res 5 becomes dense (6^3 * 4 <= 1024), so the capped
+// stride is checked on dense levels too. Then a box with its own half-size per axis
+// (positions in +-1.5 also test its clamp along y and z); each without and with `extend`
+// (hashed levels give points outside the box cells of their own), one and two networks.
+// 21-24 (test_hashgrid's table gradients): a 16-entry table (3 levels of 2 to 7 cells, 2
+// features) so that most entries are hit by 23 rows and the central differences carry real
+// gradients; D 3, 4, 4 with time capped at 2, and that extended (some points lie beyond the box).
+HashCase hash_case(const OpShape& s) {
+  HashCase h;
+  HashGridConfig& c = h.config;
+  const size_t which = s.dims.size() > 4 ? s.dims[4] : 0;
+  if (which == 0) {
+    const bool small = s.dims[3] < 8;
+    c = small ? grid_config(3, 3, static_cast<int>(s.dims[3]), 2, 7) : grid_config(4, 2, static_cast<int>(s.dims[3]), 3, 30);
+    return h;
+  }
+  if (which <= 20) {
+    const size_t k = (which - 1) / 4;  // (D, time cap, box) of the five below
+    static const std::array<std::pair<int, std::array<float, 3>>, 5> time_box = {
+        std::pair<int, std::array<float, 3>>{0, {}}, {0, {}}, {3, {}}, {0, {1.4f, 0.8f, 1.1f}}, {3, {1.6f, 0.9f, 1.0f}}};
+    c = grid_config(6, 3, 10, 2, 40);
+    c.bound = h.bound = 1.5f;
+    c.time_max_resolution = time_box[k].first;
+    c.axis_bound = time_box[k].second;
+    c.extend = (which - 1) / 2 % 2 == 1;
+    h.position_seed = 3 + unsigned(s.dims[1]);
+    h.table_seed = 5 + unsigned(s.dims[2]);
+    return h;
+  }
+  c = grid_config(3, 2, 4, 2, 7);
+  c.time_max_resolution = which >= 23 ? 2 : 0;
+  c.extend = which == 24;
+  h.position_seed = 9;
+  h.table_seed = 10;
+  return h;
+}
+
+HashGridConfig hash_config(const OpShape& s) { return hash_case(s).config; }
+
+// The shapes of cases 1-24 (rows, D, networks, log2 table size, case); the forward cases are
+// not differentiated by central differences (cases 21-24 are), each gradient case under both
+// summations.
+std::vector<OpShape> hash_case_shapes() {
+  std::vector<OpShape> shapes;
+  const size_t dims_of[5] = {3, 4, 4, 3, 4};
+  const char* what[5] = {"", "", ", time <= 3", ", box", ", time <= 3, box"};
+  for (size_t which = 1; which <= 20; ++which) {
+    const size_t k = (which - 1) / 4, nets = (which - 1) % 2 + 1;
+    const bool extend = (which - 1) / 2 % 2 == 1;
+    OpShape sh{{37, dims_of[k], nets, 10, which}, 0,
+               std::to_string(nets) + " x 37 x " + std::to_string(dims_of[k]) + ", 2^10" + what[k] + (extend ? ", extend" : "")};
+    sh.no_fd = true;
+    shapes.push_back(sh);
+  }
+  const char* grad_what[4] = {"", "", ", time <= 2", ", time <= 2, extend"};
+  for (size_t which = 21; which <= 24; ++which)
+    for (int variant : {0, 1}) {
+      const size_t dims = which == 21 ? 3 : 4;
+      shapes.push_back({{23, dims, 2, 4, which}, variant,
+                        "2 x 23 x " + std::to_string(dims) + ", 2^4" + grad_what[which - 21] + (variant ? ", atomic" : ", ordered"),
+                        GradCheckOptions{}});
+    }
+  return shapes;
 }
 
 OpEntry hash_encoding_entry() {
   OpEntry e;
   e.name = "hash_encoding";
-  // dims: rows, D, networks, log2 table size; variant 0: the ordered table gradient, 1: the
-  // atomic one.
+  // dims: rows, D, networks, log2 table size[, case]; variant 0: the ordered table gradient,
+  // 1: the atomic one.
   e.shapes = {{{kOddRows, 3, 1, 8}, 0, "1009 x 3, 2^8, ordered"}, {{kOddRows, 3, 1, 8}, 1, "1009 x 3, 2^8, atomic"},
               {{23, 4, 2, 4}, 0, "2 x 23 x 4, 2^4, ordered"}, {{23, 4, 2, 4}, 1, "2 x 23 x 4, 2^4, atomic"},
               {{19, 3, 1, 4}, 1, "19 x 3, 2^4, atomic"}, {{3, 3, 1, 4}, 0, "3 x 3, 2^4, ordered"}};
+  for (OpShape& s : hash_case_shapes()) e.shapes.push_back(std::move(s));
   e.build = [](Graph& g, const OpShape& s) {
     const size_t rows = s.dims[0], dims = s.dims[1], nets = s.dims[2];
     Tensor p = g.input("p", nets > 1 ? Shape{nets, rows, dims} : Shape{rows, dims});
@@ -49,8 +116,9 @@ OpEntry hash_encoding_entry() {
   };
   e.values = [](const OpShape& s) {
     const size_t rows = s.dims[0], dims = s.dims[1], nets = s.dims[2];
-    return std::vector<std::vector<float>>{test_positions(nets * rows, dims, 1.0f, 31),
-                                           random_floats(hash_grid_table_shape(hash_config(s), nets).numel(), -1, 1, 32)};
+    const HashCase h = hash_case(s);
+    return std::vector<std::vector<float>>{test_positions(nets * rows, dims, h.bound, h.position_seed),
+                                           random_floats(hash_grid_table_shape(h.config, nets).numel(), -1, 1, h.table_seed)};
   };
   e.reference = [](const OpCase& c) {
     const size_t rows = c.shape.dims[0], dims = c.shape.dims[1], nets = c.shape.dims[2];
@@ -63,8 +131,13 @@ OpEntry hash_encoding_entry() {
       const auto r = hash_reference(pb, rows, dims, tb, hc);
       ref.insert(ref.end(), r.begin(), r.end());
     }
-    // The grid coordinate carries up to 4 ulp of res per dimension, the slope of the output
-    // along it is at most 2 (tests/test_hashgrid.cpp): D 2 4 res 2^-24 plus the float32 sum.
+    // The kernel's grid coordinate u = (x / bound + 1) / 2 * res carries a few float32
+    // roundings, up to 4 ulp of res: du <= 4 res 2^-24 per dimension. The output's slope along
+    // one coordinate is at most the largest difference of two table values (2 for values in
+    // [-1, 1]), so atol = D * 2 * 4 res_max 2^-24 (7.6e-5 at D = 4, res 40) plus the float32
+    // sum of 16 terms; a wrong weight, vertex or hash is off by O(0.1). A cell misplaced by
+    // rounding at a cell face changes nothing beyond that: D-linear interpolation is
+    // continuous across faces.
     return std::vector<Expected>{{ref, {dims * 2.0 * 4.0 * hc.max_resolution * std::ldexp(1.0, -24) + 2e-6, 1e-6}}};
   };
   e.gradient = [](const OpCase& c) {
@@ -91,17 +164,12 @@ OpEntry hash_encoding_entry() {
     return double(s.dims[0] * s.dims[2]) * hc.levels * double(1u << s.dims[1]) * (hc.features * 4 + 10);
   };
   // The summation is chosen by NOVA_HASH_BACKWARD when the executor is built and when it runs.
-  OpEntry generic = e;
-  e.check = [generic](const OpShape& s) {
-    if (s.variant == 1 && !runtime().info().int64_atomics) {
-      BOOST_TEST_MESSAGE("hash_encoding " << s.label << ": the device has no cl_khr_int64_base_atomics");
-      return;
-    }
+  e.prepare = [](const OpShape& s, const Runtime& rt) -> std::string {
+    if (s.variant == 1 && !rt.info().int64_atomics) return "the device has no cl_khr_int64_base_atomics";
     setenv("NOVA_HASH_BACKWARD", s.variant == 1 ? "atomic" : "ordered", 1);
-    OpEntry plain = generic;
-    check_entry(plain, s);
-    unsetenv("NOVA_HASH_BACKWARD");
+    return "";
   };
+  e.restore = [] { unsetenv("NOVA_HASH_BACKWARD"); };
   return e;
 }
 

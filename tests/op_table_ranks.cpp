@@ -18,13 +18,13 @@
 
 namespace nova::test {
 
-namespace {
-
 // Ops hold a reference to their reducer: one for every graph of the table.
 GradientReducer& twin_ranks() {
   static TwinRanksReducer ranks;
   return ranks;
 }
+
+namespace {
 
 // rank_sum: the forward doubles exactly (a float sum of two equal values), so tolerance 0;
 // the adjoint is 2 x the device's upstream gradient (harness default tolerance). Central
@@ -67,23 +67,14 @@ OpEntry depth_from_moments_entry() {
 // entry's case (free_space_table_case), against its float64 loss (rtol 1e-4) and the central
 // differences in sigma (rtol 1e-3, atol 1e-5 of the gradient's scale) as that entry. The
 // depth also feeds an mse, so it takes a gradient: the fit's moments are constants and add
-// none, leaving the mse's 2 depth / R (float32 of two roundings: rtol 1e-6).
+// none, leaving the mse's 2 depth / R (float32 of two roundings: rtol 1e-6). The check is
+// op_table_checks.cpp's.
 OpEntry free_space_over_ranks_entry() {
   OpEntry e;
   e.name = "free_space_loss_over_ranks";
   e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}, {{2, 9, 3}, 0, "2 NeRFs x 9 rays x 3"}};
-  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, 0.5f, &twin_ranks()); };
+  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, &twin_ranks()); };
   e.values = free_space_values;
-  e.check = [](const OpShape& s) {
-    const FreeSpaceCase f = free_space_case(s);
-    const FreeSpaceRun run = run_free_space(f, runtime(), true, &twin_ranks());
-    expect_close({run.loss}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss over ranks");
-    const std::vector<double> fd = free_space_sigma_fd(f, 1e-3f);
-    expect_close(run.d_raw, fd, 1e-5 * max_abs(fd), 1e-3, "d free_space_loss over ranks / d raw");
-    std::vector<double> d_depth(f.R);
-    for (size_t r = 0; r < f.R; ++r) d_depth[r] = 2.0 * f.depth[r] / double(f.R);
-    expect_close(run.d_depth, d_depth, 0, 1e-6, "d free_space_loss over ranks / d depth (the mse's alone)");
-  };
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40 + double(s.dims[1]) * 16; };
   return e;
 }

@@ -103,42 +103,53 @@ OpEntry distortion_entry() {
   return e;
 }
 
-// free_space_loss: 2 NeRFs x 1009 rays x 3 samples against the float64 reference and its
-// central differences (tests/test_free_space_loss_op.cpp states the tolerances: the loss
-// rtol 1e-4, its gradient rtol 1e-3 with atol 1e-5 of the gradient's scale).
+// free_space_loss against the float64 reference and its central differences in sigma
+// (op_table_checks.cpp): the loss rtol 1e-4 (it sums at most N R S float32 products of O(1)
+// values), its gradient rtol 1e-3 with atol 1e-5 of the gradient's scale (truncation O(h^2)
+// and float32 chains of S terms). Variant 0: 2 NeRFs x 1009 rays x 3, the table's case
+// (free_space_table_case, step 1e-3); 1-3: 3 NeRFs x 37 rays x 11 of the op's own cases
+// (free_space_random_case, step 1e-4 on sigmas kept 0.3 from the ReLU kink), plain, with
+// density noise, and with weight behind the surface (behind 0.7).
 OpEntry free_space_entry() {
   OpEntry e;
   e.name = "free_space_loss";
-  e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}};
-  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, 0.0f, nullptr); };
+  e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"},
+              {{3, 37, 11}, 1, "3 NeRFs x 37 rays x 11"},
+              {{3, 37, 11}, 2, "3 NeRFs x 37 rays x 11, noise"},
+              {{3, 37, 11}, 3, "3 NeRFs x 37 rays x 11, behind 0.7"}};
+  e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, nullptr); };
   e.values = free_space_values;
-  e.check = [](const OpShape& s) {
-    const FreeSpaceCase f = free_space_case(s);
-    const FreeSpaceRun run = run_free_space(f, runtime());
-    expect_close({run.loss}, {free_space_reference(f, f.raw)}, 0, 1e-4, "free_space_loss");
-    const std::vector<double> fd = free_space_sigma_fd(f, 1e-3f);
-    expect_close(run.d_raw, fd, 1e-5 * max_abs(fd), 1e-3, "d free_space_loss / d raw");
-  };
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40; };
   return e;
 }
 
 }  // namespace
 
-FreeSpaceCase free_space_case(const OpShape& s) { return free_space_table_case(s.dims[0], s.dims[1], s.dims[2]); }
+FreeSpaceCase free_space_case(const OpShape& s) {
+  if (s.variant == 0) return free_space_table_case(s.dims[0], s.dims[1], s.dims[2]);
+  FreeSpaceCase f = free_space_random_case(s.dims[0], s.dims[1], s.dims[2], s.variant == 2, 10 * unsigned(s.variant));
+  f.behind = s.variant == 3 ? 0.7f : 0.0f;
+  return f;
+}
 
 std::vector<std::vector<float>> free_space_values(const OpShape& s) {
   const FreeSpaceCase f = free_space_case(s);
-  return {f.raw, f.delta, f.z, f.depth, f.target, f.valid, f.masks};
+  std::vector<std::vector<float>> v = {f.raw, f.delta, f.z, f.depth, f.target, f.valid, f.masks};
+  if (!f.noise.empty()) v.push_back(f.noise);
+  return v;
 }
 
-OpGraph free_space_graph(Graph& g, const OpShape& s, float behind, GradientReducer* ranks) {
-  const size_t N = s.dims[0], R = s.dims[1], S = s.dims[2];
+OpGraph free_space_graph(Graph& g, const OpShape& s, GradientReducer* ranks) {
+  const FreeSpaceCase f = free_space_case(s);
+  const size_t N = f.N, R = f.R, S = f.S;
   Tensor raw = g.input("raw", Shape{N, R * S, 5}, true), delta = g.input("delta", Shape{N, R, S});
   Tensor z = g.input("z", Shape{R, S}), depth = g.input("depth", Shape{R}), target = g.input("target", Shape{R});
   Tensor valid = g.input("valid", Shape{R}), masks = g.input("masks", Shape{N, R});
-  Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks, {}, 0.05f, 1, behind, ranks);
-  return OpGraph{{raw, delta, z, depth, target, valid, masks}, {l}, l};
+  Tensor noise = f.noise.empty() ? Tensor{} : g.input("noise", Shape{N, R * S});
+  Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, 1, f.behind, ranks);
+  std::vector<Tensor> inputs = {raw, delta, z, depth, target, valid, masks};
+  if (noise.valid()) inputs.push_back(noise);
+  return OpGraph{inputs, {l}, l};
 }
 
 // depth_loss: every fifth ray invalid; its float64 definition and the central differences of

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <vector>
 
+#include "harness.hpp"
+#include "nova/render.hpp"
+
 namespace nova::test {
 
 struct RenderRefInput {
@@ -79,6 +82,48 @@ inline RenderRefOutput render_reference(const RenderRefInput& in) {
     }
   }
   return out;
+}
+
+// The device's options for the reference's conventions.
+inline RenderOptions render_options(const RenderRefInput& in) {
+  RenderOptions o;
+  o.rgb_sigmoid = in.rgb_sigmoid;
+  o.blend_sigmoid = in.blend_sigmoid;
+  o.hard_blend = in.hard_blend;
+  o.blend_eps = static_cast<float>(in.blend_eps);
+  o.alpha_full_sum = in.alpha_full_sum;
+  o.no_blend = in.no_blend;
+  o.nerf_depth = in.nerf_depth;
+  return o;
+}
+
+inline std::vector<float> to_float(const std::vector<double>& v) { return {v.begin(), v.end()}; }
+
+// Moderate random fields: raw rgb and blend in [-3, 3], sigma in [-1, 4] (a quarter of the
+// samples clipped by the ReLU), spacing like 64 NDC samples (1/64 * |d|, |d| in [0.8, 1.2]),
+// the last sample 1e10 |d| as the reference does.
+inline RenderRefInput random_render_case(int nerfs, int rays, int samples, int channels, bool per_nerf_delta,
+                           bool noise, unsigned seed) {
+  RenderRefInput in;
+  in.nerfs = nerfs;
+  in.rays = rays;
+  in.samples = samples;
+  in.channels = channels;
+  const size_t rs = static_cast<size_t>(rays) * samples;
+  in.raw = to_double(random_floats(nerfs * rs * channels, -3, 3, seed));
+  const auto sig = random_floats(nerfs * rs, -1, 4, seed + 1);
+  for (size_t s = 0; s < nerfs * rs; ++s) in.raw[s * channels + 3] = sig[s];
+  const size_t dn = per_nerf_delta ? nerfs : 1;
+  const auto norm = random_floats(dn * rays, 0.8f, 1.2f, seed + 2);
+  in.delta.resize(dn * rs);
+  for (size_t q = 0; q < dn * static_cast<size_t>(rays); ++q)
+    for (int i = 0; i < samples; ++i)
+      in.delta[q * samples + i] = static_cast<float>((i + 1 < samples ? 1.0 / samples : 1e10) * norm[q]);
+  in.z.resize(rs);
+  for (int r = 0; r < rays; ++r)
+    for (int i = 0; i < samples; ++i) in.z[r * samples + i] = static_cast<float>((i + 0.5) / samples);
+  if (noise) in.noise = to_double(random_floats(nerfs * rs, -1, 1, seed + 3));
+  return in;
 }
 
 }  // namespace nova::test

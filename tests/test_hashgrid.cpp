@@ -1,23 +1,19 @@
-// The hash encoding against a float64 host reference (forward, dense and hashed levels,
-// clamping, one and several networks, 3-D and 4-D inputs, time with fewer cells than space) and central finite differences of
-// the device forward (table gradient, also when the table is read twice).
+// The hash encoding: geometric resolutions, what `extend` changes, central finite differences
+// of a table read twice (the gradients accumulate), both table-gradient summations against
+// float64 sums with their determinism and exact scaling, and refused settings. Its forward
+// against the float64 host reference (dense and hashed levels, clamping, one and several
+// networks, 3-D and 4-D inputs, time with fewer cells than space, a box per axis, extended
+// levels) and the table gradient's central differences are the op table's hash_encoding
+// entry (tests/op_table_grid.cpp), which states their tolerances.
 //
-// Tolerances: the kernel's grid coordinate u = (x / bound + 1) / 2 * res carries a few float32
-// roundings, up to 4 ulp of res: du <= 4 res 2^-24 per dimension. The output's slope along
-// one coordinate is at most the largest difference of two table values (2 for values in
-// [-1, 1]), so atol = D * 2 * 4 res_max 2^-24 (7.6e-5 at D = 4, res 40) plus the float32 sum
-// of 16 terms; a wrong weight, vertex or hash is off by O(0.1). A cell misplaced by rounding
-// at a cell face changes nothing beyond that: D-linear interpolation is continuous across
-// faces. The encoding is linear in the table, so the finite differences
-// carry only float32 rounding: the harness default (2e-2 of the gradient's scale) holds.
+// The encoding is linear in the table, so the finite differences carry only float32
+// rounding: the harness default (2e-2 of the gradient's scale) holds.
 #include <boost/test/unit_test.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <string>
-#include <utility>
-#include <tuple>
 #include <vector>
 
 #include "harness.hpp"
@@ -31,6 +27,7 @@ using namespace nova;
 using nova::test::check_gradients;
 using nova::test::expect_close;
 using nova::test::for_each_vertex;
+using nova::test::grid_config;
 using nova::test::hash_reference;
 using nova::test::OpUnderTest;
 using nova::test::random_floats;
@@ -93,50 +90,6 @@ BOOST_AUTO_TEST_CASE(resolutions_are_geometric) {
   BOOST_TEST(r == (std::vector<float>{16, 32, 64, 128, 256}), boost::test_tools::per_element());
 }
 
-BOOST_AUTO_TEST_CASE(forward_matches_reference) {
-  // Levels from 2 to 40 cells with a 2^10 table: 3-D levels up to res 9 are dense (10^3 <=
-  // 1024), finer ones hashed; 4-D goes hashed sooner (res 5: 6^4 > 1024).
-  HashGridConfig c;
-  c.levels = 6;
-  c.features = 3;
-  c.log2_size = 10;
-  c.min_resolution = 2;
-  c.max_resolution = 40;
-  c.bound = 1.5f;
-  // Time (the 4th coordinate) as space, then capped at 3 cells: res 5 becomes dense
-  // (6^3 * 4 <= 1024), so the capped stride is checked on dense levels too. Then a box with
-  // its own half-size per axis; positions drawn in +-1.5 also test its clamp along y and z.
-  for (auto [dims, time_cap, box] : {std::tuple<size_t, int, std::array<float, 3>>{3, 0, {}},
-                                     {4, 0, {}}, {4, 3, {}}, {3, 0, {1.4f, 0.8f, 1.1f}},
-                                     {4, 3, {1.6f, 0.9f, 1.0f}}}) {
-   for (bool extend : {false, true}) {
-    c.time_max_resolution = time_cap;
-    c.axis_bound = box;
-    c.extend = extend;
-    for (size_t nets : {1, 2}) {
-      const size_t rows = 37;
-      const size_t tsize = hash_grid_table_shape(c).numel();
-      const auto pos = test_positions(nets * rows, dims, c.bound, 3 + unsigned(dims));
-      const auto table = random_floats(nets * tsize, -1, 1, 5 + unsigned(nets));
-      const auto out = run_encoding(pos, table, nets, rows, dims, c);
-      std::vector<double> ref;
-      for (size_t b = 0; b < nets; ++b) {
-        const std::vector<float> pb(pos.begin() + b * rows * dims, pos.begin() + (b + 1) * rows * dims);
-        const std::vector<float> tb(table.begin() + b * tsize, table.begin() + (b + 1) * tsize);
-        const auto r = hash_reference(pb, rows, dims, tb, c);
-        ref.insert(ref.end(), r.begin(), r.end());
-      }
-      BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap << " networks " << nets
-                                  << " box " << c.half_size(0) << "," << c.half_size(1) << "," << c.half_size(2)
-                                  << " extend " << extend) {
-        const double atol = dims * 2.0 * 4.0 * c.max_resolution * std::ldexp(1.0, -24) + 2e-6;
-        expect_close(out, ref, atol, 1e-6, "hash encoding");
-      }
-    }
-   }
-  }
-}
-
 BOOST_AUTO_TEST_CASE(extend_changes_only_points_outside_the_box) {
   // Inside the box both modes read the same vertices with the same weights, bit for bit;
   // outside, hashed levels differ (their own cells) while dense levels still clamp.
@@ -166,44 +119,9 @@ BOOST_AUTO_TEST_CASE(extend_changes_only_points_outside_the_box) {
   BOOST_TEST(outside_differs > rows / 2);  // nearly every outside point's hashed features move
 }
 
-BOOST_AUTO_TEST_CASE(table_gradient) {
-  // A 16-entry table so that most entries are hit by the 23 rows and the checked components
-  // carry real gradients.
-  HashGridConfig c;
-  c.levels = 3;
-  c.features = 2;
-  c.log2_size = 4;
-  c.min_resolution = 2;
-  c.max_resolution = 7;
-  // The last case extends the hashed levels: test_positions puts some points beyond the box.
-  for_each_backward([&](const std::string&) {
-  for (auto [dims, time_cap, extend] : {std::tuple<size_t, int, bool>{3, 0, false}, {4, 0, false}, {4, 2, false},
-                                        {4, 2, true}}) {
-    c.time_max_resolution = time_cap;
-    c.extend = extend;
-    const size_t nets = 2, rows = 23;
-    const size_t tsize = hash_grid_table_shape(c).numel();
-    BOOST_TEST_CONTEXT("dims " << dims << " time cells <= " << time_cap << " extend " << extend) {
-      check_gradients(
-          [&](Graph& g) {
-            Tensor p = g.input("p", Shape{nets, rows, dims});
-            Tensor t = g.input("table", hash_grid_table_shape(c, nets), true);
-            return OpUnderTest{{p, t}, hash_encoding(p, t, c)};
-          },
-          {test_positions(nets * rows, dims, 1.0f, 9), random_floats(nets * tsize, -1, 1, 10)});
-    }
-  }
-  });
-}
-
 BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
   // Two encodings of one table: its gradient is the sum of both (the second backward adds).
-  HashGridConfig c;
-  c.levels = 2;
-  c.features = 2;
-  c.log2_size = 4;
-  c.min_resolution = 3;
-  c.max_resolution = 5;
+  const HashGridConfig c = grid_config(2, 2, 4, 3, 5);
   const size_t rows = 19;
   for_each_backward([&](const std::string&) {
     check_gradients(
@@ -228,12 +146,7 @@ BOOST_AUTO_TEST_CASE(table_read_twice_accumulates) {
 // and scaling table and targets by 2^-20 scales the gradient by exactly 2^-20 (the fixed-point scale
 // follows the gradient's size: nothing underflows).
 BOOST_AUTO_TEST_CASE(table_gradient_matches_float64_sums) {
-  HashGridConfig c;
-  c.levels = 4;
-  c.features = 2;
-  c.log2_size = 8;
-  c.min_resolution = 3;
-  c.max_resolution = 30;
+  const HashGridConfig c = grid_config(4, 2, 8, 3, 30);
   const size_t rows = 1031, dims = 3, outs = static_cast<size_t>(c.outputs());
   const auto pos = test_positions(rows, dims, 1.0f, 31);
   const auto table = random_floats(hash_grid_table_shape(c).numel(), -1, 1, 32);

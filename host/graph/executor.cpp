@@ -212,10 +212,10 @@ void Executor::allocate() {
   if (guard) {
     fill_guard_pattern(rt_, arena_.get(), plan_.peak_bytes);
     for (size_t i = 0; i < lives.size(); ++i) {
-      guards_.push_back({plan_.offsets[i], guard, static_cast<int>(i), false});
+      guards_.push_back({plan_.offsets[i], guard, static_cast<int>(i), false, kActivationArena});
       // Workspaces may end inside a float: the guard after one starts at the next float.
       const size_t end = plan_.offsets[i] + guard + bytes[i], after = (end + 3) / 4 * 4;
-      guards_.push_back({after, guard - (after - end), static_cast<int>(i), true});
+      guards_.push_back({after, guard - (after - end), static_cast<int>(i), true, kActivationArena});
     }
   }
   for (size_t i = 0; i < lives.size(); ++i) {
@@ -225,26 +225,41 @@ void Executor::allocate() {
         std::move(b);
   }
 
-  // Parameters and their gradients: two arenas with the same layout.
-  const size_t align_floats = align / sizeof(float);
+  // Parameters and their gradients: two arenas with the same layout. Guarded: each parameter
+  // between two guards in both arenas, the regions zeroed (a gradient no op writes reads 0).
+  const size_t align_floats = align / sizeof(float), guard_floats = guard / sizeof(float);
   std::vector<size_t> offsets(nt, 0);
   size_t floats = 0;
   for (size_t t = 0; t < nt; ++t) {
     if (graph_.tensor(t).role != TensorRole::Parameter) continue;
-    offsets[t] = floats;
-    floats += (graph_.tensor(t).shape.numel() + align_floats - 1) / align_floats * align_floats;
+    offsets[t] = floats + guard_floats;
+    floats += guard_floats + (graph_.tensor(t).shape.numel() + align_floats - 1) / align_floats * align_floats +
+              guard_floats;
   }
   param_arena_floats_ = floats;
   if (floats == 0) return;
   param_arena_ = rt_.alloc(floats * sizeof(float));
   grad_arena_ = rt_.alloc(floats * sizeof(float));
-  rt_.fill_zero(param_arena_.get(), floats * sizeof(float));
-  rt_.fill_zero(grad_arena_.get(), floats * sizeof(float));
+  for (cl_mem a : {param_arena_.get(), grad_arena_.get()}) {
+    if (guard)
+      fill_guard_pattern(rt_, a, floats * sizeof(float));
+    else
+      rt_.fill_zero(a, floats * sizeof(float));
+  }
   for (size_t t = 0; t < nt; ++t) {
     if (graph_.tensor(t).role != TensorRole::Parameter) continue;
-    const size_t bytes = graph_.tensor(t).shape.numel() * sizeof(float);
-    values_[t] = rt_.sub_buffer(param_arena_, offsets[t] * sizeof(float), bytes);
-    grads_[t] = rt_.sub_buffer(grad_arena_, offsets[t] * sizeof(float), bytes);
+    const size_t bytes = graph_.tensor(t).shape.numel() * sizeof(float), at = offsets[t] * sizeof(float);
+    values_[t] = rt_.sub_buffer(param_arena_, at, bytes);
+    grads_[t] = rt_.sub_buffer(grad_arena_, at, bytes);
+    if (!guard) continue;
+    for (int arena : {kParameterArena, kGradientArena}) {
+      rt_.fill_zero(arena == kParameterArena ? param_arena_.get() : grad_arena_.get(), bytes, at);
+      guard_owner_.push_back((arena == kParameterArena ? "parameter '" : "the gradient of parameter '") +
+                             graph_.tensor(t).name + "'");
+      const int owner = static_cast<int>(guard_owner_.size()) - 1;
+      guards_.push_back({at - guard, guard, owner, false, arena});
+      guards_.push_back({at + bytes, guard, owner, true, arena});
+    }
   }
 }
 
@@ -368,9 +383,15 @@ void Executor::check_finite(int n, Pass pass) {
 }
 
 void Executor::check_guards(int n, Pass pass) {
-  std::vector<uint32_t> arena(plan_.peak_bytes / sizeof(uint32_t));
-  rt_.download(arena_.get(), arena.data(), arena.size() * sizeof(uint32_t));
-  for (const Guard& g : guards_)
+  const Buffer* buffers[] = {&arena_, &param_arena_, &grad_arena_};
+  const size_t bytes[] = {plan_.peak_bytes, param_arena_floats_ * sizeof(float), param_arena_floats_ * sizeof(float)};
+  std::vector<uint32_t> arenas[3];
+  for (const Guard& g : guards_) {
+    std::vector<uint32_t>& arena = arenas[g.arena];
+    if (arena.empty()) {
+      arena.resize(bytes[g.arena] / sizeof(uint32_t));
+      rt_.download(buffers[g.arena]->get(), arena.data(), arena.size() * sizeof(uint32_t));
+    }
     for (size_t i = g.offset / 4; i < (g.offset + g.bytes) / 4; ++i)
       if (arena[i] != kGuardPattern) {
         std::ostringstream s;
@@ -381,6 +402,7 @@ void Executor::check_guards(int n, Pass pass) {
           << (g.after ? " after it" : " before it") << " changed)";
         throw Error(s.str(), kExitInternal);
       }
+  }
 }
 
 // ---- host access -----------------------------------------------------------------------------

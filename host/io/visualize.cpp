@@ -347,18 +347,19 @@ Image8 plot_bar_groups(const std::vector<BarGroup>& groups, const std::string& t
   return from_bgr(img);
 }
 
-Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& title, const std::string& x_label,
-                    const std::string& y_label, int width, int height) {
+Image8 plot_xy(const std::vector<ScatterGroup>& series, const XYChart& chart, int width, int height) {
   cv::Mat img(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
   const cv::Scalar black(0, 0, 0), grid(225, 225, 225);
+  const bool level = std::isfinite(chart.level);
   double x1 = 0, y0 = INFINITY, y1 = -INFINITY;
-  for (const ScatterGroup& g : groups)
+  for (const ScatterGroup& g : series)
     for (auto [x, y] : g.xy) {
       if (!std::isfinite(x) || !std::isfinite(y)) continue;
       x1 = std::max(x1, x);
       y0 = std::min(y0, y);
       y1 = std::max(y1, y);
     }
+  if (level) y0 = std::min(y0, chart.level), y1 = std::max(y1, chart.level);
   if (!std::isfinite(y0)) y0 = 0, y1 = 1;
   const double pad = std::max(0.5, (y1 - y0) * 0.08);
   double xstep = 1, ystep = 1;
@@ -373,35 +374,72 @@ Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& 
     centred_text(img, axis_tick_text(x, xstep), px(x), f.bottom + 20, 0.45, black);
   }
   cv::rectangle(img, {f.left, f.top}, {f.right, f.bottom}, black, 1);
-  for (size_t gi = 0; gi < groups.size(); ++gi)
-    for (size_t i = 0; i < groups[gi].xy.size(); ++i) {
-      const auto [x, y] = groups[gi].xy[i];
+  const auto dashes = [&](int from, int to, int y) {
+    for (int x = from; x < to; x += 12) cv::line(img, {x, y}, {std::min(x + 6, to), y}, black, 1);
+  };
+  if (level) dashes(f.left, f.right, f.py(chart.level));
+  // A series' marker: circles, from the eleventh series on squares.
+  const auto marker = [&](size_t gi, cv::Point p) {
+    const cv::Scalar c = kColours[gi % 10];
+    const int r = chart.marker;
+    if (gi / 10 % 2 == 0)
+      cv::circle(img, p, r, c, cv::FILLED, cv::LINE_AA);
+    else
+      cv::rectangle(img, {p.x - r, p.y - r}, {p.x + r, p.y + r}, c, cv::FILLED);
+  };
+  for (size_t gi = 0; gi < series.size(); ++gi) {
+    std::vector<cv::Point> line;
+    for (auto [x, y] : series[gi].xy)
+      if (std::isfinite(x) && std::isfinite(y)) line.emplace_back(px(x), f.py(y));
+    if (chart.lines && line.size() > 1) cv::polylines(img, line, false, kColours[gi % 10], 2, cv::LINE_AA);
+    for (size_t i = 0; i < series[gi].xy.size(); ++i) {
+      const auto [x, y] = series[gi].xy[i];
       if (!std::isfinite(x) || !std::isfinite(y)) continue;
-      cv::circle(img, {px(x), f.py(y)}, 6, kColours[gi % 10], cv::FILLED, cv::LINE_AA);
-      if (i < groups[gi].names.size() && !groups[gi].names[i].empty()) {
+      marker(gi, {px(x), f.py(y)});
+      if (i < series[gi].names.size() && !series[gi].names[i].empty()) {
         // Beside the point, on its left when it lies in the right quarter.
         int base = 0;
-        const cv::Size sz = cv::getTextSize(groups[gi].names[i], kFont, 0.4, 1, &base);
+        const cv::Size sz = cv::getTextSize(series[gi].names[i], kFont, 0.4, 1, &base);
         const int tx = px(x) > f.right - (f.right - f.left) / 4 ? px(x) - 10 - sz.width : px(x) + 10;
-        cv::putText(img, groups[gi].names[i], {tx, f.py(y) + sz.height / 2}, kFont, 0.4, black, 1, cv::LINE_AA);
+        cv::putText(img, series[gi].names[i], {tx, f.py(y) + sz.height / 2}, kFont, 0.4, black, 1, cv::LINE_AA);
       }
     }
-  // Legend, top right.
+  }
+  // Legend, top or bottom right: a marker (on a stretch of line when the series are lines)
+  // and the label per series, then the level's dashes.
+  const std::string level_label = level ? chart.level_label : "";
   int lw = 0, base = 0;
-  for (const ScatterGroup& g : groups) lw = std::max(lw, cv::getTextSize(g.label, kFont, 0.45, 1, &base).width);
-  const int row = 20, bw = lw + 36, bh = row * static_cast<int>(groups.size()) + 8;
-  const int bx = f.right - bw - 8, by = f.top + 8;
-  if (!groups.empty() && bx > f.left) {
+  for (const ScatterGroup& g : series) lw = std::max(lw, cv::getTextSize(g.label, kFont, 0.45, 1, &base).width);
+  if (!level_label.empty()) lw = std::max(lw, cv::getTextSize(level_label, kFont, 0.45, 1, &base).width);
+  const int key = chart.lines ? 16 : 0, entries = static_cast<int>(series.size()) + (level_label.empty() ? 0 : 1);
+  const int row = 20, bw = lw + 36 + key, bh = row * entries + 8;
+  const int bx = f.right - bw - 8, by = chart.legend_bottom ? f.bottom - bh - 8 : f.top + 8;
+  if (!series.empty() && bx > f.left && by > f.top) {
     cv::rectangle(img, {bx, by}, {bx + bw, by + bh}, cv::Scalar(255, 255, 255), cv::FILLED);
     cv::rectangle(img, {bx, by}, {bx + bw, by + bh}, cv::Scalar(160, 160, 160), 1);
-    for (size_t gi = 0; gi < groups.size(); ++gi) {
+    for (size_t gi = 0; gi < series.size(); ++gi) {
       const int y = by + 4 + row * static_cast<int>(gi) + row / 2;
-      cv::circle(img, {bx + 14, y}, 6, kColours[gi % 10], cv::FILLED, cv::LINE_AA);
-      cv::putText(img, groups[gi].label, {bx + 28, y + 5}, kFont, 0.45, black, 1, cv::LINE_AA);
+      if (chart.lines) cv::line(img, {bx + 8, y}, {bx + 20 + key, y}, kColours[gi % 10], 2, cv::LINE_AA);
+      marker(gi, {bx + 14 + key / 2, y});
+      cv::putText(img, series[gi].label, {bx + 28 + key, y + 5}, kFont, 0.45, black, 1, cv::LINE_AA);
+    }
+    if (!level_label.empty()) {
+      const int y = by + 4 + row * static_cast<int>(series.size()) + row / 2;
+      dashes(bx + 8, bx + 20 + key, y);
+      cv::putText(img, level_label, {bx + 28 + key, y + 5}, kFont, 0.45, black, 1, cv::LINE_AA);
     }
   }
-  draw_labels(img, f, title, x_label, y_label);
+  draw_labels(img, f, chart.title, chart.x_label, chart.y_label);
   return from_bgr(img);
+}
+
+Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& title, const std::string& x_label,
+                    const std::string& y_label, int width, int height) {
+  XYChart chart;
+  chart.title = title;
+  chart.x_label = x_label;
+  chart.y_label = y_label;
+  return plot_xy(groups, chart, width, height);
 }
 
 Image8 image_row(const std::vector<Image8>& images, const std::vector<std::string>& captions, int gap) {

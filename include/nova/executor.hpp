@@ -18,7 +18,9 @@ struct ExecutorOptions {
   unsigned seed = 1;          // parameter initialisation
   // Tests only: every activation, gradient and workspace gets a region of its own (no reuse)
   // between two guards of at least this many bytes, filled with a pattern that every op is
-  // checked not to have changed (an op writing past its tensor). 0: the planned arena.
+  // checked not to have changed (an op writing past or before its tensor); so does every
+  // parameter and parameter gradient in their arenas, whose guards an optimiser updating the
+  // whole arena would overwrite (guarded executors are for checking ops). 0: the planned arena.
   size_t guard_bytes = 0;
 };
 
@@ -139,10 +141,12 @@ class Executor {
   std::vector<Buffer> fwd_workspace_, bwd_workspace_;  // per node
   MemoryPlan plan_;
   bool forward_done_ = false;
+  enum GuardedArena { kActivationArena, kParameterArena, kGradientArena };
   struct Guard {
-    size_t offset, bytes;  // in the arena
-    int owner;             // index into lives: a tensor, a gradient or a workspace
+    size_t offset, bytes;  // in its arena
+    int owner;             // index into guard_owner_: a tensor, a gradient, a workspace, a parameter
     bool after;            // the guard after the region (else before it)
+    int arena;             // GuardedArena
   };
   std::vector<Guard> guards_;
   std::vector<std::string> guard_owner_;

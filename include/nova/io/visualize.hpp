@@ -3,6 +3,7 @@
 // colour, and MP4 output. Implemented in nova_io (OpenCV); no OpenCV types here. Images are
 // RGB-interleaved Image8 as everywhere in nova (include/nova/scene.hpp); PNG output is
 // nova::write_png (include/nova/io/image_io.hpp).
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -72,6 +73,21 @@ struct ScatterGroup {
 };
 Image8 plot_scatter(const std::vector<ScatterGroup>& groups, const std::string& title, const std::string& x_label,
                     const std::string& y_label, int width = 1000, int height = 420);
+
+// The x-y chart behind plot_scatter (and nova-bench tradeoff's curves): the points of each
+// series in its colour (from the eleventh series on, square markers), joined in order by a
+// line when `lines`; a legend at the top right (bottom right: `legend_bottom`); a dashed
+// horizontal line at `level` when it is finite, with `level_label` in the legend. x runs from
+// 0 to above the largest x, y around the points and the level.
+struct XYChart {
+  std::string title, x_label, y_label;
+  bool lines = false;
+  int marker = 6;  // radius in pixels
+  bool legend_bottom = false;
+  double level = NAN;
+  std::string level_label;
+};
+Image8 plot_xy(const std::vector<ScatterGroup>& series, const XYChart& chart, int width = 1000, int height = 420);
 
 // The images left to right, `gap` pixels apart, each under its caption (a band of text above
 // the row; captions may be empty, or fewer than the images). Grey images are drawn as RGB;
