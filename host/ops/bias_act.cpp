@@ -17,6 +17,22 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
                        cl_mem dy, cl_mem dh, bool acc_dh, cl_mem db, bool acc_db,
                        cl_mem partials) {
   const std::string options = activation_options(act);
+  const size_t n = s.batch * s.rows * s.cols;
+  if (db && bias_grad_row_walk(ctx.rt.info())) {
+    // One pass: the partial sums (bit for bit those of bias_grad_partial) and dh together.
+    const size_t bc = s.batch * s.cols;
+    const bool write_dh = dh && n > 0;
+    ctx.launch("activation", "bias_grad_rows", options)
+        .arg(y).arg(dy).arg(partials).arg(write_dh ? dh : partials).arg(u32(s.rows, "rows"))
+        .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
+        .arg(static_cast<int>(write_dh)).arg(static_cast<int>(acc_dh))
+        .run2(bc, 1, kRowWalkGroup, kRowWalkGroup);
+    ctx.launch("reduce", "colsum_finish")
+        .arg(partials).arg(db).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
+        .arg(static_cast<int>(acc_db))
+        .run(bc);
+    return;
+  }
   if (db) {
     const size_t bc = s.batch * s.cols;
     ctx.launch("activation", "bias_grad_partial", options)
@@ -28,11 +44,22 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
         .arg(static_cast<int>(acc_db))
         .run(bc);
   }
-  const size_t n = s.batch * s.rows * s.cols;
   if (dh && n > 0)
     ctx.launch("activation", "bias_act_backward", options)
         .arg(y).arg(dy).arg(dh).arg(u32(n, "bias_act size")).arg(static_cast<int>(acc_dh))
         .run(n);
+}
+
+void bias_act_forward(ExecContext& ctx, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y) {
+  bias_act_forward(ctx.rt, s, act, h, b, y);
+}
+
+void bias_act_forward(Runtime& rt, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y) {
+  if (s.batch * s.rows * s.cols == 0) return;
+  rt.launch("activation", "bias_act_forward", activation_options(act))
+      .arg(h).arg(b).arg(y).arg(u32(s.cols, "cols")).arg(u32(s.rows, "rows"))
+      .arg(u32(s.batch * s.rows, "bias_act rows"))
+      .run2(s.cols, s.batch * s.rows);
 }
 
 }  // namespace detail
@@ -47,14 +74,8 @@ class BiasActOp final : public Op {
   size_t parts() const { return detail::bias_grad_parts(s_.rows); }
 
   void forward(ExecContext& ctx) override {
-    const size_t rows = ctx.in_rows(0, s_.rows);
-    const size_t n = s_.batch * rows * s_.cols;
-    if (n == 0) return;
-    ctx.launch("activation", "bias_act_forward", activation_options(act_))
-        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.out(0))
-        .arg(detail::u32(n, "bias_act size")).arg(detail::u32(s_.cols, "cols"))
-        .arg(detail::u32(rows * s_.cols, "per batch"))
-        .run(n);
+    detail::bias_act_forward(ctx, {s_.batch, ctx.in_rows(0, s_.rows), s_.cols}, act_, ctx.in(0), ctx.in(1),
+                             ctx.out(0));
   }
 
   void backward(ExecContext& ctx) override {

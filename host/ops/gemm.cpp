@@ -10,6 +10,7 @@
 
 #include "gemm_clblast.hpp"
 #include "gemm_host.hpp"
+#include "layer_parts.hpp"
 #include "nova/tuning.hpp"
 #include "op_util.hpp"
 
@@ -56,11 +57,7 @@ void epilogue_pass(Runtime& rt, const GemmArgs& g, const GemmEpilogue& e) {
   if (g.ldc != g.n || (g.batch > 1 && (g.stride_c != g.m * g.n || e.stride_bias != g.n)))
     throw Error("GEMM epilogue: a separate pass needs C dense and one bias row per batch",
                 kExitInternal);
-  const size_t count = g.batch * g.m * g.n;
-  rt.launch("activation", "bias_act_forward", ActivationParams{static_cast<int>(e.act)}.to_defines())
-      .arg(g.c).arg(e.bias).arg(g.c).arg(u32(count, "gemm epilogue size"))
-      .arg(u32(g.n, "gemm n")).arg(u32(g.m * g.n, "gemm epilogue per batch"))
-      .run(count);
+  detail::bias_act_forward(rt, {g.batch, g.m, g.n}, e.act, g.c, e.bias, g.c);
 }
 
 void own_gemm(Runtime& rt, const GemmArgs& g, cl_mem temp, const GemmEpilogue& epi) {

@@ -40,10 +40,19 @@ inline size_t bias_grad_parts(size_t rows) {
   return std::min<size_t>(64, std::max<size_t>(1, rows / 64));
 }
 
+// Work-groups of bias_grad_rows (one work-item per column): small, so that a CPU device's
+// threads share the columns of even a 64-wide layer.
+constexpr size_t kRowWalkGroup = 16;
+
+// y = act(h + b) over s (s.rows: the rows in use), b one row per batch; y may be h itself.
+void bias_act_forward(ExecContext& ctx, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y);
+void bias_act_forward(Runtime& rt, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y);
+
 // bias_act's backward over s (s.rows: the rows in use) from y = act(h + b) and dy: first
 // db (+)= column sums of dy act'(y) (two stages through `partials`, parts x batch x cols
 // floats), then dh (+)= dy act'(y). Either output may be null. dh may be dy itself (overwritten
-// in place): db reads dy before.
+// in place): db reads dy before. A device whose tuning says bias_grad_row_walk does both in
+// one pass in row order (bias_grad_rows), with the same values bit for bit.
 void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts, cl_mem y,
                        cl_mem dy, cl_mem dh, bool acc_dh, cl_mem db, bool acc_db,
                        cl_mem partials);

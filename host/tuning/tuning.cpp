@@ -35,6 +35,7 @@ DeviceTuning pocl_cpu() {
   // Always the indirect path: one compiled program instead of two (a cold PoCL compile costs
   // 10-35 s per CLBlast program), and MLP layers are large anyway.
   t.xgemm_min_indirect_size = 0;
+  t.bias_grad_row_walk = true;
   return t;
 }
 
@@ -106,6 +107,16 @@ HashBackward hash_backward_choice(const DeviceInfo& d) {
   // A CPU's few cores are busy with the networks and levels of the ordered backward, which
   // measured faster there (docs/performance.md); a GPU needs parallelism over rows.
   return d.int64_atomics && !(d.type & CL_DEVICE_TYPE_CPU) ? HashBackward::Atomic : HashBackward::Ordered;
+}
+
+bool bias_grad_row_walk(const DeviceInfo& d) {
+  const char* env = std::getenv("NOVA_BIAS_GRAD");
+  const std::string want = env ? env : "";
+  if (want == "row-walk") return true;
+  if (want == "strided") return false;
+  if (!want.empty() && want != "auto")
+    throw Error("NOVA_BIAS_GRAD='" + want + "': expected auto, row-walk or strided", kExitUsage);
+  return device_tuning(d).bias_grad_row_walk;
 }
 
 const DeviceTuning& device_tuning(const DeviceInfo& device) {
