@@ -74,32 +74,62 @@ __kernel void bias_grad_partial(__global const float* y, __global const float* d
 }
 
 // The bias gradient for devices that read memory best in order (CPUs): one work-item per
-// column j walks its rows in order and keeps the `parts` partial sums of bias_grad_partial in
-// private memory (row r adds to sum r % parts), so the partials, and db after colsum_finish,
-// are those of bias_grad_partial bit for bit, while memory is read row after row instead of
-// `parts` rows apart. It also writes dh (+)= dy act'(y) on the way (bias_act_backward's
-// values; dh may be dy itself: each element is read before it is written). BIAS_GRAD_PARTS
-// bounds `parts` (bias_grad_parts: at most 64).
-#ifndef BIAS_GRAD_PARTS
-#define BIAS_GRAD_PARTS 64
+// eight adjacent columns of one batch walks their rows in order and keeps the `parts`
+// partial sums of bias_grad_partial for each in private memory (row r adds to sum r % parts),
+// so the partials, and db after colsum_finish, are those of bias_grad_partial bit for bit,
+// while memory is read row after row (a short contiguous run per row) instead of `parts` rows
+// apart by one work-item per column. It also writes dh (+)= dy act'(y) on the way
+// (bias_act_backward's values; dh may be dy itself: each element is read before it is
+// written). `parts` is at most 64 (bias_grad_parts).
+// Eight adjacent columns (one float8) per work-item: a full chunk is read, summed and written
+// as vectors; a ragged last chunk of a batch element-wise, with the same arithmetic.
+inline float8 act_derivative8(float8 y) {
+#if ACT == 1
+  return select((float8)(0.0f), (float8)(1.0f), y > (float8)(0.0f));
+#elif ACT == 0
+  return (float8)(1.0f);
+#else  // lane by lane: the scalar function's exact values
+  return (float8)(act_derivative(y.s0), act_derivative(y.s1), act_derivative(y.s2), act_derivative(y.s3),
+                  act_derivative(y.s4), act_derivative(y.s5), act_derivative(y.s6), act_derivative(y.s7));
 #endif
+}
+
 __kernel void bias_grad_rows(__global const float* y, __global const float* dy,
                              __global float* partial, __global float* dh, uint rows, uint cols,
-                             uint batch_cols, uint parts, int write_dh, int accumulate_dh) {
+                             uint batches, uint parts, int write_dh, int accumulate_dh) {
 #pragma OPENCL FP_CONTRACT OFF  // as in bias_act_backward
-  const uint j = get_global_id(0);
-  if (j >= batch_cols) return;
-  const size_t base = (size_t)(j / cols) * rows * cols + j % cols;
-  float s[BIAS_GRAD_PARTS];
-  for (uint p = 0; p < parts; ++p) s[p] = 0.0f;
+  const uint chunks = (cols + 7) / 8;
+  const uint w = get_global_id(0);
+  if (w >= batches * chunks) return;
+  const uint batch = w / chunks, c0 = (w % chunks) * 8;
+  const uint width = min(8u, cols - c0);
+  const size_t base = (size_t)batch * rows * cols + c0;
+  float8 s[64];
+  for (uint p = 0; p < parts; ++p) s[p] = (float8)(0.0f);
   for (uint r0 = 0; r0 < rows; r0 += parts) {
     const uint n = min(parts, rows - r0);
     for (uint p = 0; p < n; ++p) {
-      const size_t i = base + (size_t)(r0 + p) * cols;
-      const float g = dy[i] * act_derivative(y[i]);
-      s[p] += g;
-      if (write_dh) dh[i] = accumulate_dh ? dh[i] + g : g;
+      const size_t row = base + (size_t)(r0 + p) * cols;
+      if (width == 8) {
+        const float8 g = vload8(0, dy + row) * act_derivative8(vload8(0, y + row));
+        s[p] += g;
+        if (write_dh) vstore8(accumulate_dh ? vload8(0, dh + row) + g : g, 0, dh + row);
+      } else {
+        float part[8];
+        vstore8(s[p], 0, part);
+        for (uint c = 0; c < width; ++c) {
+          const float g = dy[row + c] * act_derivative(y[row + c]);
+          part[c] += g;
+          if (write_dh) dh[row + c] = accumulate_dh ? dh[row + c] + g : g;
+        }
+        s[p] = vload8(0, part);
+      }
     }
   }
-  for (uint p = 0; p < parts; ++p) partial[(size_t)p * batch_cols + j] = s[p];
+  const uint batch_cols = batches * cols;
+  for (uint p = 0; p < parts; ++p) {
+    float part[8];
+    vstore8(s[p], 0, part);
+    for (uint c = 0; c < width; ++c) partial[(size_t)p * batch_cols + batch * cols + c0 + c] = part[c];
+  }
 }

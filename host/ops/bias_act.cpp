@@ -22,11 +22,12 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
     // One pass: the partial sums (bit for bit those of bias_grad_partial) and dh together.
     const size_t bc = s.batch * s.cols;
     const bool write_dh = dh && n > 0;
+    const size_t chunks = (s.cols + kRowWalkColumns - 1) / kRowWalkColumns;
     ctx.launch("activation", "bias_grad_rows", options)
         .arg(y).arg(dy).arg(partials).arg(write_dh ? dh : partials).arg(u32(s.rows, "rows"))
-        .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
+        .arg(u32(s.cols, "cols")).arg(u32(s.batch, "batches")).arg(u32(parts, "parts"))
         .arg(static_cast<int>(write_dh)).arg(static_cast<int>(acc_dh))
-        .run2(bc, 1, kRowWalkGroup, kRowWalkGroup);
+        .run2(s.batch * chunks, 1, 1, 1);
     ctx.launch("reduce", "colsum_finish")
         .arg(partials).arg(db).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
         .arg(static_cast<int>(acc_db))

@@ -40,9 +40,9 @@ inline size_t bias_grad_parts(size_t rows) {
   return std::min<size_t>(64, std::max<size_t>(1, rows / 64));
 }
 
-// Work-groups of bias_grad_rows (one work-item per column): small, so that a CPU device's
-// threads share the columns of even a 64-wide layer.
-constexpr size_t kRowWalkGroup = 16;
+// Columns per work-item of bias_grad_rows (one float8): a 256-wide layer gives 32 work-items,
+// a 64-wide one 8, each its own work-group, so a CPU device's threads share them.
+constexpr size_t kRowWalkColumns = 8;
 
 // y = act(h + b) over s (s.rows: the rows in use), b one row per batch; y may be h itself.
 void bias_act_forward(ExecContext& ctx, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y);
