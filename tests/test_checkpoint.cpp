@@ -64,6 +64,21 @@ BOOST_AUTO_TEST_CASE(crc32_check_value) {
   BOOST_TEST(crc32("123456789", 9) == 0xcbf43926u);  // the CRC-32/ISO-HDLC check value
   BOOST_TEST(crc32("", 0) == 0u);
   BOOST_TEST(crc32("56789", 5, crc32("1234", 4)) == 0xcbf43926u);
+  // Eight bytes at a time against the bitwise definition, at every length and alignment
+  // around the eight-byte steps (and a longer buffer split anywhere).
+  std::vector<unsigned char> bytes(1037);
+  for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<unsigned char>((i * 2654435761u) >> 13);
+  const auto bitwise = [](const unsigned char* p, size_t n) {
+    uint32_t c = 0xffffffffu;
+    for (size_t i = 0; i < n; ++i) {
+      c ^= p[i];
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xedb88320u ^ (c >> 1) : c >> 1;
+    }
+    return ~c;
+  };
+  for (size_t start = 0; start < 9; ++start)
+    for (size_t n = 0; n < 40; ++n) BOOST_TEST(crc32(bytes.data() + start, n) == bitwise(bytes.data() + start, n));
+  BOOST_TEST(crc32(bytes.data() + 517, 520, crc32(bytes.data(), 517)) == bitwise(bytes.data(), bytes.size()));
 }
 
 BOOST_AUTO_TEST_CASE(round_trip_is_bit_exact) {
