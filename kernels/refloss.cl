@@ -211,14 +211,7 @@ __kernel void abs_err_partial(__global const float* pred, __global const float* 
   partial[p] = s;
 }
 
-// out[0] = scale * sum(partial): a single work-item.
-__kernel void abs_err_finish(__global const float* partial, __global float* out, uint parts,
-                             float scale) {
-  if (get_global_id(0) != 0) return;
-  float s = 0.0f;
-  for (uint i = 0; i < parts; ++i) s += partial[i];
-  out[0] = scale * s;
-}
+// Stage 2 is loss.cl's sum_finish.
 
 // grad (+)= gloss scale sign(pred - target).
 __kernel void abs_err_backward(__global const float* pred, __global const float* target,

@@ -69,6 +69,19 @@ inline float blend_norm(float bsum) {
 #endif
 }
 
+// NeRF n's step through a sample's blended opacity: A, the sample's mask (1 - prod(1 - a b)
+// built up as sum P a b, or with ALPHA_FULL_SUM the plain sum of a b), and P, the product of
+// (1 - a b) so far; returns a b. The forward and the backward's replay share it.
+inline float blend_step(float alpha, float b, float* A, float* P) {
+  const float ab = alpha * b;
+#if ALPHA_FULL_SUM
+  *A += ab;
+#else
+  *A += *P * ab;
+#endif
+  *P *= 1.0f - ab;
+  return ab;
+}
 
 // Everything one sample of one NeRF contributes, with the derivatives of the activations.
 typedef struct {
@@ -158,14 +171,7 @@ __kernel void render_forward(__global const float* raw, __global const float* de
     const float inv = blend_norm(bsum);
     float P = 1.0f, A = 0.0f;
     for (int n = 0; n < NERFS; ++n) {
-      const float b = t[n].blend * inv;
-      const float ab = t[n].alpha * b;
-#if ALPHA_FULL_SUM
-      A += ab;
-#else
-      A += P * ab;
-#endif
-      P *= 1.0f - ab;
+      const float ab = blend_step(t[n].alpha, t[n].blend * inv, &A, &P);
       for (int k = 0; k < 3; ++k) col[k] += T * ab * t[n].c[k];
       // The NeRF alone, with its own transmittance.
       const float w = Tn[n] * t[n].alpha;
@@ -265,14 +271,7 @@ __kernel void render_backward(__global const float* raw, __global const float* d
     float A = 0.0f, P = 1.0f, G = gd * z[at] + ga;
     for (int n = 0; n < NERFS; ++n) {
       b[n] = t[n].blend * inv;
-      const float ab = t[n].alpha * b[n];
-#if ALPHA_FULL_SUM
-      A += ab;
-#else
-      A += P * ab;
-#endif
-      P *= 1.0f - ab;
-      q[n] = 1.0f - ab;
+      q[n] = 1.0f - blend_step(t[n].alpha, b[n], &A, &P);
       gcc[n] = gc[0] * t[n].c[0] + gc[1] * t[n].c[1] + gc[2] * t[n].c[2];
       G += gm[n] * b[n];
     }

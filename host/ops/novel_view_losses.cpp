@@ -7,14 +7,8 @@
 namespace nova {
 namespace {
 
-[[noreturn]] void bad(const std::string& op, const std::string& what) {
-  throw Error(op + ": " + what, kExitInternal);
-}
-
-void require_data(const std::string& op, const Tensor& t) {
-  if (t.valid() && t.info().requires_grad)
-    bad(op, "'" + t.info().name + "' is data and cannot take a gradient");
-}
+using detail::require_data;
+using detail::bad_op;
 
 void finish_sum(ExecContext& ctx, unsigned parts, float scale) {
   ctx.launch("loss", "sum_finish").arg(ctx.workspace()).arg(ctx.out(0)).arg(parts).arg(scale).run(1);
@@ -151,7 +145,7 @@ class AlphaLossOp final : public Op {
 detail::Matrix3 raw_dims(const Tensor& raw, const std::string& op) {
   const auto d = detail::as_batched(raw.shape(), op);
   if (d.cols < static_cast<size_t>(kRawChannels))
-    bad(op, "raw needs at least 5 channels, got " + raw.shape().str());
+    bad_op(op, "raw needs at least 5 channels, got " + raw.shape().str());
   return d;
 }
 
@@ -161,9 +155,9 @@ Tensor masked_mse(Tensor pred, Tensor target, Tensor mask) {
   const std::string op = "masked_mse";
   const auto p = detail::as_batched(pred.shape(), op);
   if (target.shape().numel() != p.rows * p.cols || target.shape().cols() != p.cols)
-    bad(op, "target " + target.shape().str() + " does not fit prediction " + pred.shape().str());
+    bad_op(op, "target " + target.shape().str() + " does not fit prediction " + pred.shape().str());
   if (mask.shape().numel() != p.batch * p.rows)
-    bad(op, "mask " + mask.shape().str() + " does not fit prediction " + pred.shape().str());
+    bad_op(op, "mask " + mask.shape().str() + " does not fit prediction " + pred.shape().str());
   require_data(op, target);
   require_data(op, mask);
   Graph& g = *pred.graph;

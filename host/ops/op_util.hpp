@@ -16,6 +16,16 @@ inline unsigned u32(size_t v, const char* what) {
   return static_cast<unsigned>(v);
 }
 
+// An op's refusal of how it was built (a programming error, not a user's input).
+[[noreturn]] inline void bad_op(const std::string& op, const std::string& what) {
+  throw Error(op + ": " + what, kExitInternal);
+}
+
+// Refuses a tensor the op reads as data (targets, masks, weights) that asks for a gradient.
+inline void require_data(const std::string& op, const Tensor& t) {
+  if (t.valid() && t.info().requires_grad) bad_op(op, "'" + t.info().name + "' is data and cannot take a gradient");
+}
+
 // Split a [B, M, N] or [M, N] shape into (batch, rows, cols).
 struct Matrix3 {
   size_t batch, rows, cols;

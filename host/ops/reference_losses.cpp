@@ -14,14 +14,8 @@
 namespace nova {
 namespace {
 
-[[noreturn]] void bad(const std::string& op, const std::string& what) {
-  throw Error(op + ": " + what, kExitInternal);
-}
-
-void require_data(const std::string& op, const Tensor& t) {
-  if (t.valid() && t.info().requires_grad)
-    bad(op, "'" + t.info().name + "' is data and cannot take a gradient");
-}
+using detail::require_data;
+using detail::bad_op;
 
 constexpr const char* kFamily = "refloss";
 
@@ -200,7 +194,7 @@ class MaskL1Op final : public Op {
     ctx.launch(kFamily, "abs_err_partial")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.workspace()).arg(detail::u32(n_, "size")).arg(parts)
         .run(parts_);
-    ctx.launch(kFamily, "abs_err_finish")
+    ctx.launch("loss", "sum_finish")
         .arg(ctx.workspace()).arg(ctx.out(0)).arg(parts).arg(scale()).run(1);
   }
 
@@ -238,9 +232,9 @@ detail::GroupSums build_masked_mse_area(Tensor pred, Tensor target, Tensor mask,
   const size_t tn = target.shape().numel();
   const bool own = tn == p.batch * p.rows * p.cols;
   if ((!own && tn != p.rows * p.cols) || target.shape().cols() != p.cols)
-    bad(op, "target " + target.shape().str() + " does not fit prediction " + pred.shape().str());
+    bad_op(op, "target " + target.shape().str() + " does not fit prediction " + pred.shape().str());
   if (mask.shape().numel() != p.batch * p.rows)
-    bad(op, "mask " + mask.shape().str() + " does not fit prediction " + pred.shape().str());
+    bad_op(op, "mask " + mask.shape().str() + " does not fit prediction " + pred.shape().str());
   require_data(op, target);
   require_data(op, mask);
   Tensor y = add_ratio_op(*pred.graph, pred.info().name + "." + op, sums, p.batch,
@@ -265,8 +259,8 @@ detail::GroupSums build_alpha_loss_outside(Tensor raw, Tensor delta, Tensor mask
 detail::GroupSums build_order_loss(Tensor nerf_depth, Tensor masks, bool sums) {
   const std::string op = "order_loss";
   const Shape& s = nerf_depth.shape();
-  if (s.rank() != 2 || s[0] < 2) bad(op, "depth must be [N, R] with N >= 2, got " + s.str());
-  if (masks.shape() != s) bad(op, "masks " + masks.shape().str() + " do not match depth " + s.str());
+  if (s.rank() != 2 || s[0] < 2) bad_op(op, "depth must be [N, R] with N >= 2, got " + s.str());
+  if (masks.shape() != s) bad_op(op, "masks " + masks.shape().str() + " do not match depth " + s.str());
   require_data(op, masks);
   Tensor y = add_ratio_op(*nerf_depth.graph, nerf_depth.info().name + "." + op, sums, 1,
                           std::make_unique<OrderLossOp>(s[0], s[1], sums), {nerf_depth, masks});
@@ -285,9 +279,9 @@ Tensor over_ranks(detail::GroupSums s, GradientReducer& ranks) {
 
 Tensor mask_l1_loss(Tensor mask, Tensor target) {
   const std::string op = "mask_l1_loss";
-  if (mask.shape().rank() != 2) bad(op, "mask must be [N, R], got " + mask.shape().str());
+  if (mask.shape().rank() != 2) bad_op(op, "mask must be [N, R], got " + mask.shape().str());
   if (target.shape() != mask.shape())
-    bad(op, "target " + target.shape().str() + " does not match mask " + mask.shape().str());
+    bad_op(op, "target " + target.shape().str() + " does not match mask " + mask.shape().str());
   require_data(op, target);
   Graph& g = *mask.graph;
   Tensor y = g.activation(mask.info().name + "." + op, Shape{1});
@@ -309,7 +303,7 @@ GroupSums order_loss_sums(Tensor nerf_depth, Tensor masks) { return build_order_
 
 Tensor group_ratio(const GroupSums& s) {
   if (s.sums.shape() != Shape{2 * s.groups})
-    bad("group_ratio", "sums " + s.sums.shape().str() + " are not [2 x " + std::to_string(s.groups) + "]");
+    bad_op("group_ratio", "sums " + s.sums.shape().str() + " are not [2 x " + std::to_string(s.groups) + "]");
   Graph& g = *s.sums.graph;
   Tensor y = g.activation(s.sums.info().name + ".ratio", Shape{1});
   g.add(std::make_unique<GroupRatioOfSumsOp>(s.groups, s.c, s.eps), {s.sums}, {y});
