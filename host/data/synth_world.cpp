@@ -316,24 +316,19 @@ SynthRender SynthWorld::render_instances(const Camera& cam, bool background,
       V3 colour{0, 0, 0};
 
       if (background) {
-        if (d[2] < 0) {
-          const double t = (bg.wall_z - o[2]) / d[2];
+        // The wall (facing +z at wall_z) and the floor (facing +y at floor_y), seen from the
+        // side their normal points to.
+        const auto plane = [&](int axis, double at, const auto& material, const V3& normal) {
+          if (!(d[axis] < 0)) return;
+          const double t = (at - o[axis]) / d[axis];
           if (t > 1e-9 && t < best) {
-            const V3 p = add(o, mul(d, t));
             best = t;
             owner = 0;
-            colour = mul(albedo(bg.wall, p, {0, 0, 1}, 1), shade({0, 0, 1}));
+            colour = mul(albedo(material, add(o, mul(d, t)), normal, 1), shade(normal));
           }
-        }
-        if (d[1] < 0) {
-          const double t = (bg.floor_y - o[1]) / d[1];
-          if (t > 1e-9 && t < best) {
-            const V3 p = add(o, mul(d, t));
-            best = t;
-            owner = 0;
-            colour = mul(albedo(bg.floor, p, {0, 1, 0}, 1), shade({0, 1, 0}));
-          }
-        }
+        };
+        plane(2, bg.wall_z, bg.wall, {0, 0, 1});
+        plane(1, bg.floor_y, bg.floor, {0, 1, 0});
         // Props are axis-aligned: traced about their centre in world axes, the normal taken
         // at the world hit point minus the centre.
         for (const SynthProp& prop : bg.props) {
