@@ -83,24 +83,28 @@ std::unique_ptr<TorchPeer> torch_for(const std::string& python, const TrainConfi
 // Seconds per step of `steps` steps after `warmup` untimed ones, from the trainer's current step.
 // The last step's progress report comes after the device has finished it and before run()
 // writes its closing checkpoint, which is no part of a step.
-// With a PyTorch peer, nova's steps are timed one at a time, each followed by one of the peer's
-// (alternating), and both times are medians; `torch_seconds` gets the peer's.
+// With a PyTorch peer the trainer must report every step (log_every 1): each report ends one
+// nova step (its device work done), the peer then runs one step of its own, and both times
+// are medians; `torch_seconds` gets the peer's.
 double time_steps(Runtime& rt, Trainer& t, long warmup, long steps, TorchPeer* peer = nullptr,
                   double* torch_seconds = nullptr) {
   t.run({}, t.step() + warmup);
   rt.finish();
-  const auto one_run = [&](long n) {
-    const auto a = std::chrono::steady_clock::now();
+  using clock = std::chrono::steady_clock;
+  auto a = clock::now();
+  if (!peer) {
     auto b = a;
-    t.run([&](const TrainProgress&) { b = std::chrono::steady_clock::now(); }, t.step() + n);
-    return std::chrono::duration<double>(b - a).count();
-  };
-  if (!peer) return one_run(steps) / static_cast<double>(steps);
-  std::vector<double> nova_s, torch_s;
-  for (long i = 0; i < steps; ++i) {
-    nova_s.push_back(one_run(1));
-    torch_s.push_back(peer->step());
+    t.run([&](const TrainProgress&) { b = clock::now(); }, t.step() + steps);
+    return std::chrono::duration<double>(b - a).count() / static_cast<double>(steps);
   }
+  std::vector<double> nova_s, torch_s;
+  t.run(
+      [&](const TrainProgress&) {
+        nova_s.push_back(std::chrono::duration<double>(clock::now() - a).count());
+        torch_s.push_back(peer->step());
+        a = clock::now();
+      },
+      t.step() + steps);
   *torch_seconds = median(torch_s);
   return median(nova_s);
 }
@@ -138,12 +142,13 @@ void write_csv(const std::vector<Row>& rows, const std::string& out, const std::
 // A copy of the run's config.ini and checkpoint.bin in `dir`, resumed: every later step of it
 // is the step the run would take next (its own randomness, grids and their updates).
 std::unique_ptr<Trainer> resumed_copy(Runtime& rt, const Scene& scene, TrainConfig c, const RunFolder& run,
-                                      const fs::path& dir, long more_steps, bool profile = false) {
+                                      const fs::path& dir, long more_steps, bool profile = false,
+                                      int log_every = 1000000) {
   fs::create_directories(dir);
   fs::copy_file(run.config_path(), dir / kConfigFile, fs::copy_options::overwrite_existing);
   fs::copy_file(run.checkpoint_path(), dir / kCheckpointFile, fs::copy_options::overwrite_existing);
   c.steps += static_cast<int>(more_steps);  // room to go on past the run's end
-  c.log_every = 1000000;
+  c.log_every = log_every;
   c.checkpoint_every = 1000000;
   auto t = std::make_unique<Trainer>(rt, scene, c, dir.string());
   t->set_profile(profile);  // before resume(), which builds the step's executor
@@ -167,16 +172,17 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
   Row r;
   std::ostringstream profiles;
   {
-    auto t = resumed_copy(rt, scene, files.config, run, scratch / "run", more);
-    const bool joint = t->step() >= files.config.pretrain_steps && scene.num_objects > 0;
+    const long at = std::stol(files.checkpoint.get("step"));
+    const bool joint = at >= files.config.pretrain_steps && scene.num_objects > 0;
+    std::string why;
+    auto peer = torch_for(torch_python(o.str("torch")), files.config, 1 + (joint ? scene.num_objects : 0), why);
+    auto t = resumed_copy(rt, scene, files.config, run, scratch / "run", more, false, peer ? 1 : 1000000);
     std::cout << "device " << rt.info().name << "; run " << run.dir() << " (preset " << files.config.preset
               << ", step " << t->step() << ", " << (joint ? "joint" : "pretraining") << ") on " << scene_dir << "; "
               << warmup << " warm-up + " << steps << " timed steps, skipping as the run's grids say\n\n";
+    if (!peer) std::cout << "PyTorch: not compared (" << why << ")\n";
     r = Row{files.config.preset, joint ? "joint" : "pretrain", joint ? scene.num_objects : 0, files.config.rays,
             files.config.samples};
-    std::string why;
-    auto peer = torch_for(torch_python(o.str("torch")), files.config, 1 + (joint ? scene.num_objects : 0), why);
-    if (!peer) std::cout << "PyTorch: not compared (" << why << ")\n";
     r.seconds = time_steps(rt, *t, warmup, steps, peer.get(), &r.torch_seconds);
     r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
   }
@@ -256,11 +262,13 @@ int step(const Args& args) {
         r.rays = c.rays;
         r.samples = c.samples;
         {
-          Trainer t(rt, s, c, (scratch / "run").string());
           std::string why;
           auto peer = torch_for(python, c, 1 + r.objects, why);
           if (!peer && !told_torch) std::cout << "PyTorch: not compared (" << why << ")\n";
           told_torch = true;
+          TrainConfig timed = c;
+          if (peer) timed.log_every = 1;  // a report after every step, where PyTorch takes its turn
+          Trainer t(rt, s, timed, (scratch / "run").string());
           r.seconds = time_steps(rt, t, warmup, steps, peer.get(), &r.torch_seconds);
           r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
         }
