@@ -29,6 +29,9 @@ struct Benchmark {
 };
 const std::vector<Benchmark>& benchmarks();
 
+// The middle value (the upper one of an even count; 0 for none).
+double median(std::vector<double> v);
+
 // Median of `repeats` timings of `fn` (seconds), after one untimed warm-up call.
 double time_median(int repeats, const std::function<void()>& fn);
 

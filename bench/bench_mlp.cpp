@@ -13,10 +13,10 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
-#include <thread>
 
 #include "bench.hpp"
 #include "dense_fusion.hpp"
+#include "mlp_network.hpp"
 #include "nova/executor.hpp"
 #include "nova/gemm.hpp"
 #include "nova/tuning.hpp"
@@ -154,7 +154,7 @@ int mlp(const Args& args) {
   c.width = static_cast<int>(o.integer("width"));
   c.depth = static_cast<int>(o.integer("depth"));
   if (c.skip >= c.depth) c.skip = -1;  // shallow networks have no skip connection
-  const size_t in = 63;
+  const size_t in = kMlpInputs;
   const auto shapes = layer_shapes(c, in);
   size_t tuned_shapes = 0;
   try {
@@ -186,27 +186,10 @@ int mlp(const Args& args) {
       const size_t m = static_cast<size_t>(batch_l);
       for (bool backward : {false, true}) {
         // The network with fused dense layers (ex) and with linear + bias_act (two).
-        struct Network {
-          Graph g;
-          std::unique_ptr<Executor> ex;
-        };
         const auto build = [&](bool fused) {
-          auto n = std::make_unique<Network>();
-          Tensor x = n->g.input("x", Shape{m, in});
-          Tensor target = n->g.input("target", Shape{m, 4});
           MlpConfig cc = c;
           cc.fused_layers = fused;
-          Tensor y = build_mlp(x, cc).output;
-          if (backward)
-            n->g.set_loss(mse(y, target));
-          else
-            n->g.keep(y);
-          ExecutorOptions eo;
-          eo.profile = true;
-          n->ex = std::make_unique<Executor>(rt, n->g, eo);
-          n->ex->set(x, std::vector<float>(m * in, 0.1f));
-          n->ex->set(target, std::vector<float>(m * 4, 0.5f));
-          return n;
+          return mlp_network(rt, cc, m, backward, /*profile=*/true);
         };
         const auto fused_net = build(true), two_net = build(false);
         Executor& ex = *fused_net->ex;
@@ -318,12 +301,9 @@ int mlp(const Args& args) {
   // The same network's training step beside PyTorch, with the first provider.
   set_gemm_provider(rt, providers.front());
   std::ostringstream torch_csv;
-  const long torch_threads = o.integer("torch-threads");
   std::cout << "\n";
   compare_with_torch(rt, c, o.integers("batches"), repeats, torch_python(o.str("torch")),
-                     torch_threads > 0 ? static_cast<int>(torch_threads)
-                                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())),
-                     std::cout, torch_csv);
+                     static_cast<int>(o.integer("torch-threads")), std::cout, torch_csv);
   std::cout << "\n(device = the whole graph: GEMMs, bias + activation, concat, loss; host BLAS "
                "= the GEMMs alone; 2-op = the same network of linear + bias_act ops)\n\n"
             << profile << "\nCSV\n" << csv.str() << "\nCSV (layer GEMMs)\n" << layer_csv.str()

@@ -15,7 +15,6 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
-#include <thread>
 
 #include "bench.hpp"
 #include "nova/io/scene_io.hpp"
@@ -56,11 +55,6 @@ struct Row {
   double torch_seconds = 0;  // PyTorch's step of the same MLPs alone (0: not compared)
 };
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
 // The MLPs of a step in PyTorch: the preset's static trunk (its encoded input, depth x width,
 // skip, 4 outputs) at rays x samples rows for each of the step's NeRFs, as one batch (the same
 // FLOPs as one network each). Null where `python` is empty or has no torch (why says so).
@@ -76,7 +70,6 @@ std::unique_ptr<TorchPeer> torch_for(const std::string& python, const TrainConfi
   shape.width = f.width;
   shape.depth = f.depth;
   shape.skip = f.skip < f.depth ? f.skip : -1;
-  shape.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   return TorchPeer::start(python, shape, why);
 }
 
@@ -107,6 +100,15 @@ double time_steps(Runtime& rt, Trainer& t, long warmup, long steps, TorchPeer* p
       t.step() + steps);
   *torch_seconds = median(torch_s);
   return median(nova_s);
+}
+
+// The per-op table of `steps` profiled steps after `warmup` untimed ones (their kernel builds),
+// from the trainer's current step; the trainer profiles (set_profile before its executor).
+std::string profiled_steps(Trainer& t, long warmup, long steps) {
+  t.run({}, t.step() + warmup);
+  t.reset_profile();
+  t.run({}, t.step() + steps);
+  return t.profile_table();
 }
 
 void print_row(const Row& r) {
@@ -190,10 +192,8 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
   print_row(r);
   if (profile_steps > 0) {
     auto t = resumed_copy(prt, scene, files.config, run, scratch / "profile", more, true);
-    t->run({}, t->step() + warmup);
-    t->reset_profile();
-    t->run({}, t->step() + profile_steps);
-    profiles << "\n" << r.preset << " " << r.phase << " (" << profile_steps << " profiled steps)\n" << t->profile_table();
+    profiles << "\n" << r.preset << " " << r.phase << " (" << profile_steps << " profiled steps)\n"
+             << profiled_steps(*t, warmup, profile_steps);
   }
   write_csv({r}, o.str("out"), profiles.str());
   return 0;
@@ -276,11 +276,8 @@ int step(const Args& args) {
         if (profile_steps > 0) {
           Trainer t(prt, s, c, (scratch / "profile").string());
           t.set_profile(true);
-          t.run({}, warmup);
-          t.reset_profile();
-          t.run({}, warmup + profile_steps);
           profiles << "\n" << r.preset << " " << r.phase << (joint ? " K=" + std::to_string(K) : std::string())
-                   << " (" << profile_steps << " profiled steps)\n" << t.profile_table();
+                   << " (" << profile_steps << " profiled steps)\n" << profiled_steps(t, warmup, profile_steps);
         }
         rows.push_back(r);
         print_row(r);

@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "bench.hpp"
 #include "nova/executor.hpp"
 #include "nova/gemm.hpp"
 #include "nova/ops.hpp"
@@ -18,11 +19,6 @@ double seconds(const std::function<void()>& fn) {
   const auto t0 = std::chrono::steady_clock::now();
   fn();
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
 }
 
 // A w -> w ReLU layer on [m, w] inputs, fused or as two ops, with an mse loss for backward.

@@ -28,6 +28,11 @@ const std::vector<Benchmark>& benchmarks() {
   return all;
 }
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
 double time_median(int repeats, const std::function<void()>& fn) {
   fn();
   std::vector<double> t;
@@ -36,8 +41,7 @@ double time_median(int repeats, const std::function<void()>& fn) {
     fn();
     t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
   }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
+  return median(t);
 }
 
 ScratchDir::ScratchDir(const std::string& what)

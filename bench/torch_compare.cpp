@@ -5,20 +5,12 @@
 #include <iomanip>
 #include <ostream>
 
-#include "nova/executor.hpp"
-#include "nova/ops.hpp"
+#include "bench.hpp"
+#include "mlp_network.hpp"
 #include "nova/optim.hpp"
 #include "torch_peer.hpp"
 
 namespace nova::bench {
-namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-}  // namespace
 
 void compare_with_torch(Runtime& rt, const MlpConfig& c, const std::vector<long>& batches,
                         int repeats, const std::string& python, int threads, std::ostream& out,
@@ -33,7 +25,7 @@ void compare_with_torch(Runtime& rt, const MlpConfig& c, const std::vector<long>
     const size_t m = static_cast<size_t>(batch_l);
     for (bool train : {false, true}) {
       std::string why;
-      TorchMlpShape shape{m, 63, c.width, c.depth, c.skip, threads, !train};
+      TorchMlpShape shape{m, kMlpInputs, c.width, c.depth, c.skip, threads, !train};
       std::unique_ptr<TorchPeer> peer = TorchPeer::start(python, shape, why);
       if (!peer) {
         out << "PyTorch: not compared (" << why << ")\n";
@@ -44,17 +36,8 @@ void compare_with_torch(Runtime& rt, const MlpConfig& c, const std::vector<long>
         out << "beside PyTorch (the same network; a training step is forward, backward and one Adam "
                "update in both; alternating step by step, medians of " << repeats << "):\n";
       headed = true;
-      Graph g;
-      Tensor x = g.input("x", Shape{m, 63});
-      Tensor target = g.input("target", Shape{m, 4});
-      Tensor y = build_mlp(x, c).output;
-      if (train)
-        g.set_loss(mse(y, target));
-      else
-        g.keep(y);
-      Executor ex(rt, g);
-      ex.set(x, std::vector<float>(m * 63, 0.1f));
-      ex.set(target, std::vector<float>(m * 4, 0.5f));
+      const auto net = mlp_network(rt, c, m, train);
+      Executor& ex = *net->ex;
       Adam adam(rt, ex.parameter_floats());
       const auto nova_step = [&] {
         const auto t0 = std::chrono::steady_clock::now();

@@ -11,7 +11,8 @@
 namespace nova::bench {
 
 // Prints a table (batch, pass, nova and PyTorch samples/s, ratio nova / PyTorch) to `out` and
-// its CSV rows to `csv`; where `python` is empty or has no torch, one line saying so.
+// its CSV rows to `csv`; where `python` is empty or has no torch, one line saying so. PyTorch
+// runs on `threads` threads (0: the machine's hardware threads).
 void compare_with_torch(Runtime& rt, const MlpConfig& c, const std::vector<long>& batches,
                         int repeats, const std::string& python, int threads, std::ostream& out,
                         std::ostream& csv);

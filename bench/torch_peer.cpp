@@ -1,6 +1,8 @@
 #include "torch_peer.hpp"
 
+#include <algorithm>
 #include <csignal>
+#include <thread>
 #include <filesystem>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -19,11 +21,20 @@ std::string torch_python(const std::string& option) {
 
 std::unique_ptr<TorchPeer> TorchPeer::start(const std::string& python, const TorchMlpShape& s,
                                             std::string& why) {
+  // A child that dies makes a later write fail (EPIPE, "has gone") instead of killing the bench.
+  std::signal(SIGPIPE, SIG_IGN);
   int down[2], up[2];
-  if (pipe(down) != 0 || pipe(up) != 0) throw Error("nova-bench: cannot create a pipe for PyTorch");
+  if (pipe(down) != 0) throw Error("nova-bench: cannot create a pipe for PyTorch");
+  if (pipe(up) != 0) {
+    close(down[0]);
+    close(down[1]);
+    throw Error("nova-bench: cannot create a pipe for PyTorch");
+  }
+  const int threads = s.threads > 0 ? s.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::vector<std::string> args = {python, "-c", kTorchMlpScript, std::to_string(s.batch),
-                                   "--threads", std::to_string(s.threads), "--inputs", std::to_string(s.inputs), "--width", std::to_string(s.width),
-                                   "--depth", std::to_string(s.depth), "--skip", std::to_string(s.skip)};
+                                   "--threads", std::to_string(threads), "--inputs", std::to_string(s.inputs),
+                                   "--width", std::to_string(s.width), "--depth", std::to_string(s.depth),
+                                   "--skip", std::to_string(s.skip)};
   if (s.forward_only) args.push_back("--forward-only");
   const pid_t pid = fork();
   if (pid < 0) throw Error("nova-bench: cannot start " + python);

@@ -11,7 +11,7 @@ namespace nova::bench {
 struct TorchMlpShape {
   size_t batch = 65536;
   int inputs = 63, width = 256, depth = 8, skip = 4;
-  int threads = 2;
+  int threads = 0;  // 0: this machine's hardware threads
   bool forward_only = false;
 };
 

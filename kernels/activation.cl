@@ -73,16 +73,7 @@ __kernel void bias_grad_partial(__global const float* y, __global const float* d
   partial[(size_t)p * batch_cols + j] = s;
 }
 
-// The bias gradient for devices that read memory best in order (CPUs): one work-item per
-// eight adjacent columns of one batch walks their rows in order and keeps the `parts`
-// partial sums of bias_grad_partial for each in private memory (row r adds to sum r % parts),
-// so the partials, and db after colsum_finish, are those of bias_grad_partial bit for bit,
-// while memory is read row after row (a short contiguous run per row) instead of `parts` rows
-// apart by one work-item per column. It also writes dh (+)= dy act'(y) on the way
-// (bias_act_backward's values; dh may be dy itself: each element is read before it is
-// written). `parts` is at most 64 (bias_grad_parts).
-// Eight adjacent columns (one float8) per work-item: a full chunk is read, summed and written
-// as vectors; a ragged last chunk of a batch element-wise, with the same arithmetic.
+// act_derivative of eight values at once.
 inline float8 act_derivative8(float8 y) {
 #if ACT == 1
   return select((float8)(0.0f), (float8)(1.0f), y > (float8)(0.0f));
@@ -94,6 +85,15 @@ inline float8 act_derivative8(float8 y) {
 #endif
 }
 
+// The bias gradient for devices that read memory best in order (CPUs): one work-item per
+// eight adjacent columns of one batch walks their rows in order and keeps the `parts`
+// partial sums of bias_grad_partial for each in private memory (row r adds to sum r % parts),
+// so the partials, and db after colsum_finish, are those of bias_grad_partial bit for bit,
+// while memory is read row after row instead of `parts` rows apart by one work-item per
+// column. A full chunk of eight columns is read, summed and written as one float8; a ragged
+// last chunk of a batch element by element, with the same arithmetic. It also writes
+// dh (+)= dy act'(y) on the way (bias_act_backward's values; dh may be dy itself: each element
+// is read before it is written). `parts` is at most 64 (bias_grad_parts).
 __kernel void bias_grad_rows(__global const float* y, __global const float* dy,
                              __global float* partial, __global float* dh, uint rows, uint cols,
                              uint batches, uint parts, int write_dh, int accumulate_dh) {

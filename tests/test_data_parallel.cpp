@@ -33,21 +33,27 @@ constexpr double kReferenceTolerance = 1e-4;     // two_ranks_train_as_one_with_
 
 namespace {
 
-// Every default loss term on (depth, free space and sparsity included).
-TrainConfig default_terms_config() {
-  TrainConfig c = preset_config("quick");
-  c.field.hash.levels = 8;
-  c.field.hash.log2_size = 12;
-  c.field.hash.max_resolution = 64;
+// The size every case here trains at: 128 rays x 16 samples, 6 joint steps with augmentation
+// from the first, a report every step, no skipping.
+TrainConfig small_run(TrainConfig c, int pretrain_steps) {
   c.rays = 128;
   c.samples = 16;
-  c.pretrain_steps = 6;
+  c.pretrain_steps = pretrain_steps;
   c.steps = 6;
   c.augment_start = 0;
   c.log_every = 1;
   c.checkpoint_every = 100000;
   c.occupancy = false;
   return c;
+}
+
+// Every default loss term on (depth, free space and sparsity included).
+TrainConfig default_terms_config() {
+  TrainConfig c = preset_config("quick");
+  c.field.hash.levels = 8;
+  c.field.hash.log2_size = 12;
+  c.field.hash.max_resolution = 64;
+  return small_run(c, 6);
 }
 
 TrainConfig small_config() {
@@ -66,15 +72,7 @@ TrainConfig reference_terms_config() {
   c.field.depth = 2;
   c.field.width = 32;
   c.field.skip = -1;
-  c.rays = 128;
-  c.samples = 16;
-  c.pretrain_steps = 4;
-  c.steps = 6;
-  c.augment_start = 0;
-  c.log_every = 1;
-  c.checkpoint_every = 100000;
-  c.occupancy = false;
-  return c;
+  return small_run(c, 4);
 }
 
 // One run's progress: the loss and each term, per step.

@@ -17,10 +17,10 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
                        cl_mem dy, cl_mem dh, bool acc_dh, cl_mem db, bool acc_db,
                        cl_mem partials) {
   const std::string options = activation_options(act);
-  const size_t n = s.batch * s.rows * s.cols;
-  if (db && bias_grad_row_walk(ctx.rt.info())) {
-    // One pass: the partial sums (bit for bit those of bias_grad_partial) and dh together.
-    const size_t bc = s.batch * s.cols;
+  const size_t n = s.batch * s.rows * s.cols, bc = s.batch * s.cols;
+  // CPUs: one in-order pass writes the partial sums (bit for bit bias_grad_partial's) and dh.
+  const bool row_walk = db && bias_grad_row_walk(ctx.rt.info());
+  if (row_walk) {
     const bool write_dh = dh && n > 0;
     const size_t chunks = (s.cols + kRowWalkColumns - 1) / kRowWalkColumns;
     ctx.launch("activation", "bias_grad_rows", options)
@@ -28,31 +28,21 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
         .arg(u32(s.cols, "cols")).arg(u32(s.batch, "batches")).arg(u32(parts, "parts"))
         .arg(static_cast<int>(write_dh)).arg(static_cast<int>(acc_dh))
         .run2(s.batch * chunks, 1, 1, 1);
-    ctx.launch("reduce", "colsum_finish")
-        .arg(partials).arg(db).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
-        .arg(static_cast<int>(acc_db))
-        .run(bc);
-    return;
-  }
-  if (db) {
-    const size_t bc = s.batch * s.cols;
+  } else if (db) {
     ctx.launch("activation", "bias_grad_partial", options)
         .arg(y).arg(dy).arg(partials).arg(u32(s.rows, "rows"))
         .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
         .run2(bc, parts);
+  }
+  if (db)
     ctx.launch("reduce", "colsum_finish")
         .arg(partials).arg(db).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
         .arg(static_cast<int>(acc_db))
         .run(bc);
-  }
-  if (dh && n > 0)
+  if (dh && n > 0 && !row_walk)
     ctx.launch("activation", "bias_act_backward", options)
         .arg(y).arg(dy).arg(dh).arg(u32(n, "bias_act size")).arg(static_cast<int>(acc_dh))
         .run(n);
-}
-
-void bias_act_forward(ExecContext& ctx, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y) {
-  bias_act_forward(ctx.rt, s, act, h, b, y);
 }
 
 void bias_act_forward(Runtime& rt, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y) {
@@ -75,7 +65,7 @@ class BiasActOp final : public Op {
   size_t parts() const { return detail::bias_grad_parts(s_.rows); }
 
   void forward(ExecContext& ctx) override {
-    detail::bias_act_forward(ctx, {s_.batch, ctx.in_rows(0, s_.rows), s_.cols}, act_, ctx.in(0), ctx.in(1),
+    detail::bias_act_forward(ctx.rt, {s_.batch, ctx.in_rows(0, s_.rows), s_.cols}, act_, ctx.in(0), ctx.in(1),
                              ctx.out(0));
   }
 

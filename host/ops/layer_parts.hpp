@@ -45,7 +45,6 @@ inline size_t bias_grad_parts(size_t rows) {
 constexpr size_t kRowWalkColumns = 8;
 
 // y = act(h + b) over s (s.rows: the rows in use), b one row per batch; y may be h itself.
-void bias_act_forward(ExecContext& ctx, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y);
 void bias_act_forward(Runtime& rt, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y);
 
 // bias_act's backward over s (s.rows: the rows in use) from y = act(h + b) and dy: first
