@@ -71,7 +71,7 @@ DenseLayerTimes time_dense_layer(Runtime& rt, size_t m, size_t w, int repeats) {
   const GemmArgs forward{false, false, m, w, w, 1.0f, nullptr, w, m * w, nullptr, w, w * w,
                          0.0f, nullptr, w, m * w, 1};
   const GemmConfig cfg = gemm_choice(rt, forward);
-  t.config = cfg.str() + (gemm_fuses_epilogue(cfg, forward) ? " (fused)" : " (+ bias_act pass)");
+  t.config = cfg.str() + (gemm_fuses_epilogue(cfg, forward, Activation::ReLU) ? " (fused)" : " (+ bias_act pass)");
   return t;
 }
 

@@ -265,15 +265,41 @@ BOOST_AUTO_TEST_CASE(live_rows_below_capacity) {
     check_config({3, 4099, 29, 37, kRows}, config, 71);
 }
 
+// The host BLAS (a CPU device with native kernels) applies the identity and ReLU epilogues
+// itself, in row blocks of 1,024 rows at 256 columns: 2053 rows are two full blocks and a
+// ragged one, with and without fewer live rows than the capacity. Its blocks are the single
+// call's products, so y equals the two-op path (one call, then bias_act's pass) bit for bit.
+BOOST_AUTO_TEST_CASE(host_blas_row_blocks) {
+  if (!host_gemm_available(test::runtime())) {
+    BOOST_TEST_MESSAGE("skipped: the device has no host BLAS provider");
+    return;
+  }
+  for (const Case& c : {Case{2, kRows, 29, 256, kRows}, Case{3, 4099, 29, 256, kRows}}) {
+    check_config(c, "host", 91);
+    ForcedForward forced(c, "host");
+    const Layer in = random_layer(c, 93);
+    for (Activation act : {Activation::Identity, Activation::ReLU})
+      BOOST_TEST((run_layer(c, act, true, in).y == run_layer(c, act, false, in).y),
+                 activation_name(act) << ": fused and two-op y differ");
+  }
+}
+
 BOOST_AUTO_TEST_CASE(epilogue_needs_own_kernels) {
   Runtime& rt = test::runtime();
   Buffer a = rt.upload_floats(std::vector<float>(4, 1.0f));
   const GemmArgs g{false, false, 2, 2, 1, 1.0f, a.get(), 1, 2, a.get(), 2, 2, 0.0f, a.get(), 2, 4, 1};
   const GemmEpilogue e{a.get(), 2, Activation::ReLU};
   BOOST_CHECK_THROW(gemm_with(rt, GemmConfig{}, g, nullptr, e), Error);
-  BOOST_TEST(!gemm_fuses_epilogue(GemmConfig{}, g));
-  BOOST_TEST(gemm_fuses_epilogue(GemmConfig::parse("blocked RM=6 VN=2"), g));
-  BOOST_TEST(gemm_fuses_epilogue(GemmConfig::parse("kernels"), g));
+  BOOST_TEST(!gemm_fuses_epilogue(GemmConfig{}, g, Activation::ReLU));
+  BOOST_TEST(gemm_fuses_epilogue(GemmConfig::parse("blocked RM=6 VN=2"), g, Activation::ReLU));
+  BOOST_TEST(gemm_fuses_epilogue(GemmConfig::parse("kernels"), g, Activation::Sigmoid));
+  // The host BLAS fuses the epilogues it computes with the device's bits (identity, ReLU).
+  BOOST_TEST(gemm_fuses_epilogue(GemmConfig{"host", {}}, g, Activation::ReLU));
+  BOOST_TEST(gemm_fuses_epilogue(GemmConfig{"host", {}}, g, Activation::Identity));
+  BOOST_TEST(!gemm_fuses_epilogue(GemmConfig{"host", {}}, g, Activation::Sigmoid));
+  GemmArgs transposed = g;
+  transposed.trans_a = true;
+  BOOST_TEST(!gemm_fuses_epilogue(GemmConfig{"host", {}}, transposed, Activation::ReLU));
 }
 
 // Central differences through the fused forward (NOVA_GEMM=kernels: gemm_nn with the epilogue

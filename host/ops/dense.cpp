@@ -1,6 +1,7 @@
 // A dense layer, y = act(x w + b), as one op. Its forward writes y once where nova's own GEMM
 // kernel is the tuned choice for the shape (bias and activation applied in the kernel's store:
-// gemm.hpp's epilogue) and runs CLBlast + a bias_act pass otherwise; its backward is
+// gemm.hpp's epilogue), applies them block by block behind the host BLAS (identity and ReLU)
+// and runs CLBlast or the host BLAS + a bias_act pass otherwise; its backward is
 // bias_act's then linear's, with dh = dy act'(y) written over dy, so the layer needs neither
 // the pre-activation h nor a buffer for its gradient.
 #include "layer_parts.hpp"

@@ -223,7 +223,8 @@ void set_gemm_provider(Runtime& rt, GemmProvider p) {
   providers[rt.device()] = p;
 }
 
-bool gemm_fuses_epilogue(const GemmConfig& cfg, const GemmArgs& g) {
+bool gemm_fuses_epilogue(const GemmConfig& cfg, const GemmArgs& g, Activation act) {
+  if (cfg.provider == "host") return host_gemm_fuses(g, act);
   return cfg.provider == "blocked" || (cfg.provider == "kernels" && !g.trans_a);
 }
 
@@ -236,14 +237,14 @@ void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem tem
                const GemmEpilogue& epi) {
   if (g.m == 0 || g.n == 0 || g.batch == 0) return;
   configure_gemm(rt);
-  if (epi.bias && !gemm_fuses_epilogue(cfg, g))
+  if (epi.bias && !gemm_fuses_epilogue(cfg, g, epi.act))
     throw Error("GEMM configuration '" + cfg.str() + "' cannot fuse a bias + activation");
   if (cfg.provider == "kernels") {
     if (!own_kernels_fit(g)) throw Error("own GEMM kernels: A^T B^T is not supported");
     return own_gemm(rt, g, temp, epi);
   }
   if (cfg.provider == "blocked") return blocked_gemm(rt, cfg, g, temp, epi);
-  if (cfg.provider == "host") return host_gemm(rt, g);
+  if (cfg.provider == "host") return host_gemm(rt, g, epi);
   if (cfg.provider == "clblast") return clblast_gemm(rt, cfg, g, temp);
   throw Error("unknown GEMM provider '" + cfg.provider + "'");
 }
@@ -269,7 +270,7 @@ void gemm(Runtime& rt, const GemmArgs& g, cl_mem temp, const GemmEpilogue& epi) 
              "clGetMemObjectInfo(gemm temp)");
     if (have < gemm_temp_bytes_with(rt, cfg, g)) temp = nullptr;
   }
-  if (!epi.bias || gemm_fuses_epilogue(cfg, g)) return gemm_with(rt, cfg, g, temp, epi);
+  if (!epi.bias || gemm_fuses_epilogue(cfg, g, epi.act)) return gemm_with(rt, cfg, g, temp, epi);
   gemm_with(rt, cfg, g, temp);
   epilogue_pass(rt, g, epi);
 }

@@ -68,8 +68,9 @@ size_t gemm_temp_bytes(Runtime& rt, const GemmArgs& g);
 void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp = nullptr,
                const GemmEpilogue& epi = {});
 size_t gemm_temp_bytes_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g);
-// Whether `cfg` applies an epilogue in its own store (nova's own kernels, except gemm_tn).
-bool gemm_fuses_epilogue(const GemmConfig& cfg, const GemmArgs& g);
+// Whether `cfg` applies an epilogue with activation `act` itself: nova's own kernels in their
+// store (except gemm_tn), the host BLAS block by block for the identity and ReLU (gemm_host.hpp).
+bool gemm_fuses_epilogue(const GemmConfig& cfg, const GemmArgs& g, Activation act);
 // The configuration gemm() runs `g` with under the runtime's provider.
 GemmConfig gemm_choice(Runtime& rt, const GemmArgs& g);
 
