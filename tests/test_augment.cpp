@@ -183,6 +183,15 @@ BOOST_AUTO_TEST_CASE(composite_target) {
   BOOST_TEST(err / n < 3.0);  // bilinear error, as above (silhouette band included)
   // Far from object 1 (both original and warped) the composite is the original frame.
   BOOST_TEST(a.rgb.at(2, 2, 0) == f.rgb.at(2, 2, 0));
+  // Object 1's old place, where no warped object stands now, has no target: the frame
+  // shows object 1 there while every mask is empty. Everywhere else the target is kept.
+  size_t vacated = 0;
+  for (size_t p = 0; p < f.masks[1].data.size(); ++p) {
+    const bool hole = f.masks[1].data[p] > 0 && a.masks[1].data[p] < 128;
+    vacated += hole;
+    BOOST_TEST(a.valid[0].data[p] == (hole ? 0 : 255), "pixel " << p);
+  }
+  BOOST_TEST(vacated > 100u);
   // Each NeRF's own view (the reference conventions' per-NeRF targets): the frame for the
   // static NeRF and the unrotated object 2, the whole frame warped by its homography for 1.
   BOOST_REQUIRE(a.images.size() == 3u);

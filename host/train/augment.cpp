@@ -116,6 +116,18 @@ AugmentedFrame augment_frame(const Frame& frame,
           if (j != k) a.masks[j].data[p] = 0;
     }
   }
+  // Where a turned object stood in the frame and no warped object stands now, the frame
+  // shows the object while every mask says empty; the background behind it was never seen,
+  // so the pixel has no target: such a pixel is left out (valid[0] = 0).
+  for (size_t p = 0; p < a.valid[0].data.size(); ++p) {
+    bool vacated = false, covered = false;
+    for (int k = 1; k <= k_objects; ++k) {
+      if (!rotations[k - 1]) continue;
+      vacated |= frame.masks[k].data[p] > 0;
+      covered |= a.masks[k].data[p] >= 128;
+    }
+    if (vacated && !covered) a.valid[0].data[p] = 0;
+  }
   return a;
 }
 
