@@ -12,8 +12,8 @@ namespace nova {
 // host_gemm_fuses must allow); Error when !host_gemm_available(rt).
 void host_gemm(Runtime& rt, const GemmArgs& g, const GemmEpilogue& epi = {});
 
-// Whether host_gemm applies an epilogue of activation `act` to `g` itself: row blocks of C,
-// each product followed at once by its bias and activation while the block is still in cache
+// Whether host_gemm applies an epilogue of activation `act` to `g` itself: row blocks of C
+// (8 MiB), each product followed at once by its bias and activation while the block is in cache
 // (a separate pass would read and write all of C from memory again). Only where op(A) keeps
 // A's rows (no trans_a) and only the identity and ReLU, whose float results the host computes
 // exactly as kernels/activation.cl does; the sigmoid and softplus keep the device's pass.
