@@ -124,8 +124,9 @@ void CL_CALLBACK run_host_gemm(void* p) {
       g.sgemm(kRowMajor, ta, tb, g.m, g.n, g.k, g.alpha, a, g.lda, b, g.ldb, g.beta, c, g.ldc);
       continue;
     }
-    // Row blocks of op(A) = A (host_gemm_fuses): each C element is the same dot product in the
-    // same order as in one call, so the blocks give the single call's bits.
+    // Row blocks of op(A) = A (host_gemm_fuses): a BLAS that blocks over k and n alike for
+    // any m computes each C element in the same order as one call would, so the blocks give
+    // the single call's bits (OpenBLAS does; test dense/host_blas_row_blocks checks it).
     const int block = static_cast<int>(std::max<size_t>(64, kEpilogueBlockFloats / static_cast<size_t>(g.n)));
     for (int r0 = 0; r0 < g.m; r0 += block) {
       const int rows = std::min(block, g.m - r0);
