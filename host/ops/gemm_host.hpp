@@ -8,8 +8,9 @@
 namespace nova {
 
 // host_gemm_available and host_blas_library are declared in nova/gemm.hpp.
-// Enqueues C = alpha op(A) op(B) + beta C, batched, then the epilogue if it has a bias (which
-// host_gemm_fuses must allow); Error when !host_gemm_available(rt).
+// Enqueues C = alpha op(A) op(B) + beta C, batched, then the epilogue if it has a bias (only
+// where host_gemm_fuses: gemm_with, its one caller, refuses the rest); Error when
+// !host_gemm_available(rt).
 void host_gemm(Runtime& rt, const GemmArgs& g, const GemmEpilogue& epi = {});
 
 // Whether host_gemm applies an epilogue of activation `act` to `g` itself: row blocks of C
