@@ -320,7 +320,7 @@ int accuracy(const Args& raw_args) {
     Planned p{s, base, ""};
     try {
       if (s.synthetic) {
-        synth_preset(s.preset);  // an unknown preset is an error now, not after other scenes trained
+        check_synth_preset(s.preset);  // an unknown preset is an error now, not after other scenes trained
         p.source = out + "/scenes/" + s.dir_name();
       } else {
         const std::string dir = data.empty() ? "" : data + "/" + s.folder;

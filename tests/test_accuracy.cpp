@@ -260,6 +260,12 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_write_nothing) {
   BOOST_TEST(d.code == 0, d.err);
   BOOST_TEST(d.out.find("skipped balloon") != std::string::npos, d.out);
   BOOST_TEST(!fs::exists(out));
+  // The family's sets plan like any synthetic scene (their size comes from the seed).
+  const Result f = bench_cli("--out " + out + " --scenes dev,test --dry-run", dir);
+  BOOST_TEST(f.code == 0, f.err);
+  BOOST_TEST(f.out.find("family:1") != std::string::npos, f.out);
+  BOOST_TEST(f.out.find("family:104") != std::string::npos, f.out);
+  BOOST_TEST(!fs::exists(out));
 }
 
 BOOST_AUTO_TEST_SUITE_END()

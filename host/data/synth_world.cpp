@@ -202,6 +202,11 @@ V3 motion_centre(const SynthMotion& m, double u) {
 
 }  // namespace
 
+void check_synth_preset(const std::string& name) {
+  if (name != "tiny" && name != "default" && name != "family")
+    throw Error("unknown synthetic preset '" + name + "' (use tiny, default or family)");
+}
+
 SynthPreset synth_preset(const std::string& name) {
   SynthPreset p;
   p.name = name;
@@ -216,7 +221,7 @@ SynthPreset synth_preset(const std::string& name) {
   } else if (name == "family") {
     throw Error("synthetic preset 'family' draws its size from the seed: use synth_scene");
   } else {
-    throw Error("unknown synthetic preset '" + name + "' (use tiny, default or family)");
+    check_synth_preset(name);
   }
   p.focal = 1.1 * p.width;  // about 49 degrees horizontal field of view
   return p;

@@ -60,6 +60,8 @@ struct SynthPreset {
 
 // "tiny" or "default" (fixed sizes); "family" draws its size from the seed (SynthScene).
 SynthPreset synth_preset(const std::string& name);
+// Throws the error an unknown preset name gets; "tiny", "default" and "family" pass.
+void check_synth_preset(const std::string& name);
 
 // A shape in its own frame, centred at the origin. `size` per kind:
 //   sphere: radius | box: half extents x, y, z | cylinder, disc, rod: radius, half height
