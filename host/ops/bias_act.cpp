@@ -19,8 +19,11 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
   const std::string options = activation_options(act);
   const size_t n = s.batch * s.rows * s.cols, bc = s.batch * s.cols;
   // CPUs: one in-order pass writes the partial sums (bit for bit bias_grad_partial's) and dh.
-  const bool row_walk = db && bias_grad_row_walk(ctx.rt.info());
-  if (row_walk) {
+  const BiasGradWalk walk = db ? bias_grad_walk(ctx.rt.info()) : BiasGradWalk::Strided;
+  const bool row_walk = walk != BiasGradWalk::Strided;
+  if (walk == BiasGradWalk::Host && (act == Activation::Identity || act == Activation::ReLU)) {
+    bias_grad_rows_host(ctx.rt, s, act, parts, y, dy, partials, dh, acc_dh);
+  } else if (row_walk) {
     const bool write_dh = dh && n > 0;
     const size_t chunks = (s.cols + kRowWalkColumns - 1) / kRowWalkColumns;
     ctx.launch("activation", "bias_grad_rows", options)

@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "native_call.hpp"
 #include "op_util.hpp"
 
 namespace nova {
@@ -72,10 +73,8 @@ const HostBlas& host_blas() {
   return h;
 }
 
-// What the native kernel receives (copied by the runtime): the operands' host addresses.
-// No cl_mem goes through the call's memory list: PoCL 3.1 resolves those when the command is
-// enqueued, without a sub-buffer's origin and before a fresh buffer has memory. The addresses
-// come from CL_MEM_HOST_PTR instead (Runtime::alloc backs CPU buffers with host memory).
+// What the native kernel receives (copied by the runtime): the operands' host addresses
+// (native_call.hpp).
 struct HostGemmCall {
   const float* a;
   const float* b;
@@ -142,17 +141,6 @@ int as_int(size_t v, const char* what) {
   return static_cast<int>(v);
 }
 
-// The host address of a buffer (or sub-buffer) that Runtime::alloc made on a CPU device.
-float* host_address(cl_mem m, const char* operand) {
-  void* p = nullptr;
-  cl_check(clGetMemObjectInfo(m, CL_MEM_HOST_PTR, sizeof(p), &p, nullptr), "clGetMemObjectInfo(CL_MEM_HOST_PTR)");
-  if (!p)
-    throw Error(std::string("host GEMM: operand ") + operand +
-                    " is a buffer without host memory (not from Runtime::alloc on a CPU device)",
-                kExitInternal);
-  return static_cast<float*>(p);
-}
-
 }  // namespace
 
 bool host_gemm_fuses(const GemmArgs& g, Activation act) {
@@ -160,7 +148,7 @@ bool host_gemm_fuses(const GemmArgs& g, Activation act) {
 }
 
 bool host_gemm_available(const DeviceInfo& device) {
-  return (device.type & CL_DEVICE_TYPE_CPU) && device.native_kernels && host_blas().sgemm;
+  return detail::runs_native_calls(device) && host_blas().sgemm;
 }
 
 std::string host_blas_library() { return host_blas().library; }
@@ -170,6 +158,7 @@ void host_gemm(Runtime& rt, const GemmArgs& g, const GemmEpilogue& epi) {
     throw Error("GEMM provider 'host': device " + rt.info().name +
                     " cannot run it (it needs a CPU device with native kernels and an optimised "
                     "host BLAS: OpenBLAS, BLIS or MKL; NOVA_HOST_BLAS names one)");
+  using detail::host_address;
   const HostGemmCall call{host_address(g.a, "A"), host_address(g.b, "B"), host_address(g.c, "C"),
                           host_blas().sgemm,
                           g.trans_a, g.trans_b,
@@ -179,9 +168,7 @@ void host_gemm(Runtime& rt, const GemmArgs& g, const GemmEpilogue& epi) {
                           g.stride_a, g.stride_b, g.stride_c, g.batch,
                           epi.bias ? host_address(epi.bias, "bias") : nullptr, epi.stride_bias,
                           epi.act == Activation::ReLU};
-  cl_check(clEnqueueNativeKernel(rt.queue(), run_host_gemm, const_cast<HostGemmCall*>(&call),
-                                 sizeof(call), 0, nullptr, nullptr, 0, nullptr, nullptr),
-           "clEnqueueNativeKernel(host GEMM)");
+  detail::enqueue_native(rt, run_host_gemm, call, "clEnqueueNativeKernel(host GEMM)");
 }
 
 }  // namespace nova

@@ -50,10 +50,16 @@ void bias_act_forward(Runtime& rt, Matrix3 s, Activation act, cl_mem h, cl_mem b
 // bias_act's backward over s (s.rows: the rows in use) from y = act(h + b) and dy: first
 // db (+)= column sums of dy act'(y) (two stages through `partials`, parts x batch x cols
 // floats), then dh (+)= dy act'(y). Either output may be null. dh may be dy itself (overwritten
-// in place): db reads dy before. A device whose tuning says bias_grad_row_walk does both in
-// one pass in row order (bias_grad_rows), with the same values bit for bit.
+// in place): db reads dy before. Where bias_grad_walk says Rows or Host both are done in one
+// pass in row order (bias_grad_rows, or bias_grad_rows_host), with the same values bit for bit.
 void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts, cl_mem y,
                        cl_mem dy, cl_mem dh, bool acc_dh, cl_mem db, bool acc_db,
                        cl_mem partials);
+
+// bias_grad_rows as a host function on rt's queue (bias_grad_host.cpp): the partial sums and
+// dh (+)= dy act'(y) (dh null: not written) of the kernel, bit for bit; the identity and ReLU
+// only; rt's device must run native kernels (native_call.hpp).
+void bias_grad_rows_host(Runtime& rt, Matrix3 s, Activation act, size_t parts, cl_mem y,
+                         cl_mem dy, cl_mem partials, cl_mem dh, bool acc_dh);
 
 }  // namespace nova::detail

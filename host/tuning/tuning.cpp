@@ -35,7 +35,9 @@ DeviceTuning pocl_cpu() {
   // Always the indirect path: one compiled program instead of two (a cold PoCL compile costs
   // 10-35 s per CLBlast program), and MLP layers are large anyway.
   t.xgemm_min_indirect_size = 0;
-  t.bias_grad_row_walk = true;
+  // A host function reading whole rows: 65536 x 256 in about 6 ms on 2 cores, where the
+  // kernel's work-items, each reading 32 bytes of every 1 KiB row, took about 30.
+  t.bias_grad = BiasGradWalk::Host;
   return t;
 }
 
@@ -109,14 +111,21 @@ HashBackward hash_backward_choice(const DeviceInfo& d) {
   return d.int64_atomics && !(d.type & CL_DEVICE_TYPE_CPU) ? HashBackward::Atomic : HashBackward::Ordered;
 }
 
-bool bias_grad_row_walk(const DeviceInfo& d) {
+BiasGradWalk bias_grad_walk(const DeviceInfo& d) {
   const char* env = std::getenv("NOVA_BIAS_GRAD");
   const std::string want = env ? env : "";
-  if (want == "row-walk") return true;
-  if (want == "strided") return false;
+  const bool native = (d.type & CL_DEVICE_TYPE_CPU) && d.native_kernels;
+  if (want == "host") {
+    if (!native)
+      throw Error("NOVA_BIAS_GRAD=host: device '" + d.name + "' runs no native kernels (host functions)", kExitUsage);
+    return BiasGradWalk::Host;
+  }
+  if (want == "row-walk") return BiasGradWalk::Rows;
+  if (want == "strided") return BiasGradWalk::Strided;
   if (!want.empty() && want != "auto")
-    throw Error("NOVA_BIAS_GRAD='" + want + "': expected auto, row-walk or strided", kExitUsage);
-  return device_tuning(d).bias_grad_row_walk;
+    throw Error("NOVA_BIAS_GRAD='" + want + "': expected auto, host, row-walk or strided", kExitUsage);
+  const BiasGradWalk entry = device_tuning(d).bias_grad;
+  return entry == BiasGradWalk::Host && !native ? BiasGradWalk::Rows : entry;
 }
 
 const DeviceTuning& device_tuning(const DeviceInfo& device) {

@@ -69,10 +69,16 @@ struct HashGridParams {
 enum class HashBackward { Ordered, Atomic };
 HashBackward hash_backward_choice(const DeviceInfo& device);
 
-// Whether bias_act's backward walks rows in order (DeviceTuning::bias_grad_row_walk; the same
-// sums bit for bit). NOVA_BIAS_GRAD=auto|row-walk|strided chooses; auto takes the device's
-// entry. Error (exit 2) for a bad value.
-bool bias_grad_row_walk(const DeviceInfo& device);
+// How bias_act's backward sums the bias gradient and writes dh; all three give the same bits.
+// Strided: one work-item per column and part (GPUs). Rows: one work-item per eight columns
+// walking the rows in order (activation.cl's bias_grad_rows). Host: the same walk as a host
+// function on the device's queue (bias_grad_host.cpp; CPU devices with native kernels, for the
+// identity and ReLU; other activations take Rows), reading whole rows in order on all cores.
+enum class BiasGradWalk { Strided, Rows, Host };
+// NOVA_BIAS_GRAD=auto|host|row-walk|strided chooses; auto takes the device's entry, Host only
+// where the device runs native kernels (else Rows). Error (exit 2) for a bad value, or host on
+// a device without native kernels.
+BiasGradWalk bias_grad_walk(const DeviceInfo& device);
 
 // kernels/activation.cl's ACT, and the GEMM epilogue's GEMM_BIAS_ACT (kernels/gemm.cl): the
 // activation's number (ops.hpp's Activation).
@@ -108,10 +114,10 @@ struct DeviceTuning {
   // gemm_blk: at most 16 column blocks x (64 / that) row blocks, small enough that a CPU
   // device gets many groups to share among its threads.
   WorkGroupCap blocked_gemm_group{64, 16};
-  // The bias gradient (with dh) by one work-item per column walking its rows in order
-  // (activation.cl's bias_grad_rows) instead of a work-item per column and part reading rows
-  // `parts` apart: the same sums, in the order a CPU's caches and prefetchers read fastest.
-  bool bias_grad_row_walk = false;
+  // The bias gradient (with dh) walking rows in order (BiasGradWalk::Rows or Host) instead of
+  // a work-item per column and part reading rows `parts` apart: the same sums, in the order a
+  // CPU's caches and prefetchers read fastest.
+  BiasGradWalk bias_grad = BiasGradWalk::Strided;
 };
 
 // The entry for a device ("clblast-defaults": nothing overridden).
