@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <sys/wait.h>
 
+#include "nova/io/image_io.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {
@@ -68,6 +69,19 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   const std::string json = read_all(dir / "run" / "eval.json");
   for (const char* key : {"\"mean_psnr\"", "\"mean_ssim\"", "\"compose_mean_psnr\"", "cam0_000"})
     BOOST_TEST(json.find(key) != std::string::npos, key);
+
+  // A composition target that shows nothing (objects alone, none in view: a black truth) is
+  // left out of the scores with a note, not scored as a "perfect" 361 dB.
+  const fs::path blank = dir / "blank-scene";
+  fs::copy(scene, blank, fs::copy_options::recursive);
+  {
+    const Image8 truth = read_rgb((blank / "gt/compose/objects_only.png").string());
+    write_png((blank / "gt/compose/objects_only.png").string(), Image8(truth.width, truth.height, truth.channels, 0));
+  }
+  Result eb = nova_cli("eval --run " + run + " --scene " + blank.string() + " --views cam0", dir);
+  BOOST_REQUIRE_MESSAGE(eb.code == 0, eb.err);
+  BOOST_TEST(eb.err.find("composition target objects_only shows nothing") != std::string::npos, eb.err);
+  BOOST_TEST(eb.out.find("objects_only") == std::string::npos, eb.out);
 
   // Resume continues the same run to a longer schedule.
   Result more = nova_cli("train --scene " + scene + " --out " + run + " --resume --steps 9", dir);

@@ -1,5 +1,6 @@
 #include "nova/io/evaluation.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 
@@ -65,6 +66,12 @@ std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene
     for (const auto& c : scene.compose_gt)
       if (c.name == t.name) gt = &c.rgb;
     if (!gt || t.camera < 0 || t.camera >= static_cast<int>(scene.frames.size())) continue;
+    // Objects alone where none is in view: a black truth that a black render matches exactly
+    // (PSNR "infinite", 361 in OpenCV's number), which would swamp every mean it entered.
+    if (!t.background && std::all_of(gt->data.begin(), gt->data.end(), [](uint8_t v) { return v == 0; })) {
+      std::cerr << "note: composition target " << t.name << " shows nothing (no object in view): not scored\n";
+      continue;
+    }
     ViewRequest req;
     req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
     req.background = t.background;
