@@ -3,6 +3,7 @@
 // NeRF layer shapes and the transposed products the backward uses.
 #include <boost/test/unit_test.hpp>
 #include <cmath>
+#include <dlfcn.h>
 #include <limits>
 
 #include "harness.hpp"
@@ -206,6 +207,39 @@ BOOST_AUTO_TEST_CASE(host_provider_availability) {
     return std::string(e.what()).find("native kernels") != std::string::npos;
   });
   set_gemm_provider(rt, chosen);
+}
+
+// The host provider runs narrow products (middle size <= 64) on one OpenBLAS thread and gives
+// the library its own thread count back after each, so other callers in the process (the
+// benches call it directly) are not left on one thread. Results are checked above.
+BOOST_AUTO_TEST_CASE(host_blas_thread_count_is_restored) {
+  Runtime& rt = test::runtime();
+  if (!host_gemm_available(rt)) {
+    BOOST_TEST_MESSAGE("skipped: the device has no host BLAS provider");
+    return;
+  }
+  void* lib = dlopen(host_blas_library().c_str(), RTLD_NOW | RTLD_NOLOAD);
+  auto get = lib ? reinterpret_cast<int (*)()>(dlsym(lib, "openblas_get_num_threads")) : nullptr;
+  if (!get) {
+    BOOST_TEST_MESSAGE("skipped: " << host_blas_library() << " has no openblas_get_num_threads");
+    return;
+  }
+  const int before = get();
+  const GemmProvider chosen = gemm_provider(rt);
+  set_gemm_provider(rt, GemmProvider::Host);
+  for (size_t width : {size_t{32}, size_t{256}}) {
+    Buffer a = rt.upload_floats(std::vector<float>(2048 * width, 0.5f));
+    Buffer b = rt.upload_floats(std::vector<float>(width * width, 0.25f));
+    Buffer c = rt.alloc(2048 * width * sizeof(float));
+    GemmArgs g{false, false, 2048, width, width, 1.0f, a.get(), width, 2048 * width, b.get(), width,
+               width * width, 0.0f, c.get(), width, 2048 * width, 1};
+    nova::gemm(rt, g);
+    const auto out = rt.download_floats(c.get(), 2048 * width);
+    BOOST_TEST(out[0] == 0.125f * static_cast<float>(width));
+    BOOST_TEST(get() == before, width << " wide: OpenBLAS left on " << get() << " threads, had " << before);
+  }
+  set_gemm_provider(rt, chosen);
+  dlclose(lib);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <mutex>
 #include <string>
 
 #include "native_call.hpp"
@@ -25,9 +26,15 @@ constexpr int kRowMajor = 101, kNoTrans = 111, kTrans = 112;
 using SgemmFn = void (*)(int, int, int, int, int, int, float, const float*, int, const float*,
                          int, float, float*, int);
 
+using SetThreadsFn = void (*)(int);
+using GetThreadsFn = int (*)();
+
 struct HostBlas {
   SgemmFn sgemm = nullptr;
   std::string library;  // the file that was loaded; empty when none
+  // OpenBLAS's thread count, where the library has it (the others keep their own choice).
+  SetThreadsFn set_threads = nullptr;
+  int threads = 1;  // OpenBLAS's own count at load (OPENBLAS_NUM_THREADS, else the cores)
 };
 
 // Optimised BLAS libraries only: the reference BLAS (libblas.so.3) is slower than the
@@ -56,6 +63,12 @@ HostBlas load_host_blas() {
     }
     h.sgemm = fn;
     h.library = name;
+    auto set = reinterpret_cast<SetThreadsFn>(dlsym(lib, "openblas_set_num_threads"));
+    auto get = reinterpret_cast<GetThreadsFn>(dlsym(lib, "openblas_get_num_threads"));
+    if (set && get) {
+      h.set_threads = set;
+      h.threads = std::max(1, get());
+    }
     return true;  // the library stays loaded for the life of the process
   };
   if (!choice.empty()) {
@@ -112,8 +125,25 @@ void bias_act_rows(float* c, int ldc, int r0, int rows, int n, const float* bias
   }
 }
 
-void CL_CALLBACK run_host_gemm(void* p) {
-  const HostGemmCall& g = *static_cast<const HostGemmCall*>(p);
+// OpenBLAS threads of one product: all of them only for products that are both wide (middle
+// size over 64) and large (m n k >= 2^28), one otherwise. On 2 cores (AMD EPYC) one thread ran
+// 8192-65536 rows x 32 and x 64 (forward and weight gradient) 1.06-2.5x faster than two, and
+// 8192 x 128 about as fast, where 24576-65536 x 128 and x 256 ran 1.25-1.6x faster on two.
+// A multi-threaded call also leaves OpenBLAS's idle threads spinning for a while, taking the
+// cores from the kernels that follow: the quick preset's step (64-wide networks, one 91-wide
+// colour layer) ran 1.18x faster with every product on one thread (docs/performance.md).
+int blas_threads(const HostGemmCall& g) {
+  int d[3] = {g.m, g.n, g.k};
+  std::sort(d, d + 3);
+  const double work = static_cast<double>(g.m) * g.n * g.k;
+  return d[1] > 64 && work >= 268435456.0 ? host_blas().threads : 1;
+}
+
+// One product at a time: OpenBLAS's thread count is a process-wide setting, and the queues
+// of several runtimes (data-parallel ranks as threads) may run their native kernels at once.
+std::mutex blas_mutex;
+
+void run_products(const HostGemmCall& g) {
   const int ta = g.trans_a ? kTrans : kNoTrans, tb = g.trans_b ? kTrans : kNoTrans;
   for (size_t i = 0; i < g.batch; ++i) {
     const float* a = g.a + i * g.stride_a;
@@ -134,6 +164,18 @@ void CL_CALLBACK run_host_gemm(void* p) {
       bias_act_rows(c, g.ldc, r0, rows, g.n, g.bias + i * g.stride_bias, g.relu != 0);
     }
   }
+}
+
+void CL_CALLBACK run_host_gemm(void* p) {
+  const HostGemmCall& g = *static_cast<const HostGemmCall*>(p);
+  std::lock_guard<std::mutex> lock(blas_mutex);
+  // Set for this product and restored after it: other callers of the same library in this
+  // process (the benches call it directly) keep its own count.
+  const HostBlas& blas = host_blas();
+  const int threads = blas.set_threads ? blas_threads(g) : blas.threads;
+  if (threads != blas.threads) blas.set_threads(threads);
+  run_products(g);
+  if (threads != blas.threads) blas.set_threads(blas.threads);
 }
 
 int as_int(size_t v, const char* what) {
