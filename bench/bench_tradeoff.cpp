@@ -67,7 +67,7 @@ constexpr const char* kUsage =
     "  --force            replace an existing OUT\n"
     "  --dry-run          print the plan and stop\n"
     "\n"
-    "Default settings (quick and the issue's axes; settings equal to an earlier one are trained\n"
+    "Default settings (quick and the tradeoff axes; settings equal to an earlier one are trained\n"
     "once; settings with an option this build's nova train does not know are skipped with a\n"
     "warning):\n";
 

@@ -39,7 +39,7 @@ std::vector<Setting> parse_settings_text(const std::string& text, const std::str
 
 void check_unique_names(const std::vector<Setting>& settings);
 
-// The axes around the quick preset; the first one is the baseline. Settings whose
+// The tradeoff axes around the quick preset; the first one is the baseline. Settings whose
 // configuration equals an earlier one's (quick already has 32 samples, width 64, tuned GEMMs and,
 // once `occupancy` exists, skipping on) are trained once and reported under both names.
 std::vector<Setting> default_settings();

@@ -66,7 +66,7 @@ BOOST_AUTO_TEST_CASE(settings_parse) {
   BOOST_TEST(settings[1].name == "fast");
   BOOST_TEST(settings[1].overrides[0].second == "16");
 
-  // The defaults: quick first (the baseline), every axis of the issue, the skipping pair.
+  // The defaults: quick first (the baseline), every tradeoff axis, the skipping pair.
   const auto d = default_settings();
   BOOST_TEST(d.front().name == "quick");
   BOOST_TEST(d.front().overrides.empty());
