@@ -351,7 +351,7 @@ BOOST_AUTO_TEST_CASE(gradients) {
 // walk splits its columns among threads, and dh accumulated into an input read twice.
 BOOST_AUTO_TEST_CASE(host_row_walk_and_strided_bias_gradients_agree_bit_for_bit) {
   Runtime& rt = test::runtime();
-  const bool native = rt.info().native_kernels && (rt.info().type & CL_DEVICE_TYPE_CPU);
+  const bool native = rt.info().runs_native_calls();
   std::vector<const char*> walks = {"strided", "row-walk"};
   if (native) walks.push_back("host");
   const size_t rows = 1013;

@@ -208,20 +208,19 @@ void check_synth_preset(const std::string& name) {
 }
 
 SynthPreset synth_preset(const std::string& name) {
+  check_synth_preset(name);
+  if (name == "family")
+    throw Error("synthetic preset 'family' draws its size from the seed: use synth_scene");
   SynthPreset p;
   p.name = name;
   if (name == "tiny") {
     p.width = 64;
     p.height = 48;
     p.frames = 10;
-  } else if (name == "default") {
+  } else {  // "default"
     p.width = 160;
     p.height = 120;
     p.frames = 24;
-  } else if (name == "family") {
-    throw Error("synthetic preset 'family' draws its size from the seed: use synth_scene");
-  } else {
-    check_synth_preset(name);
   }
   p.focal = 1.1 * p.width;  // about 49 degrees horizontal field of view
   return p;

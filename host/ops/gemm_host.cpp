@@ -190,7 +190,7 @@ bool host_gemm_fuses(const GemmArgs& g, Activation act) {
 }
 
 bool host_gemm_available(const DeviceInfo& device) {
-  return detail::runs_native_calls(device) && host_blas().sgemm;
+  return device.runs_native_calls() && host_blas().sgemm;
 }
 
 std::string host_blas_library() { return host_blas().library; }

@@ -4,10 +4,6 @@
 
 namespace nova::detail {
 
-bool runs_native_calls(const DeviceInfo& device) {
-  return (device.type & CL_DEVICE_TYPE_CPU) && device.native_kernels;
-}
-
 float* host_address(cl_mem m, const char* operand) {
   void* p = nullptr;
   cl_check(clGetMemObjectInfo(m, CL_MEM_HOST_PTR, sizeof(p), &p, nullptr), "clGetMemObjectInfo(CL_MEM_HOST_PTR)");

@@ -6,9 +6,6 @@
 
 namespace nova::detail {
 
-// Whether `device` can run host functions in queue order: a CPU with CL_EXEC_NATIVE_KERNEL.
-bool runs_native_calls(const DeviceInfo& device);
-
 // The host address of a buffer (or sub-buffer) that Runtime::alloc made on a CPU device;
 // Error (internal) for a buffer without host memory. `operand` names it in the message.
 float* host_address(cl_mem m, const char* operand);

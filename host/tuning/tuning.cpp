@@ -114,7 +114,7 @@ HashBackward hash_backward_choice(const DeviceInfo& d) {
 BiasGradWalk bias_grad_walk(const DeviceInfo& d) {
   const char* env = std::getenv("NOVA_BIAS_GRAD");
   const std::string want = env ? env : "";
-  const bool native = (d.type & CL_DEVICE_TYPE_CPU) && d.native_kernels;
+  const bool native = d.runs_native_calls();
   if (want == "host") {
     if (!native)
       throw Error("NOVA_BIAS_GRAD=host: device '" + d.name + "' runs no native kernels (host functions)", kExitUsage);

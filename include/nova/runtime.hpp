@@ -39,6 +39,9 @@ struct DeviceInfo {
   bool native_kernels = false;  // CL_EXEC_NATIVE_KERNEL: runs host functions in queue order
   bool int64_atomics = false;   // cl_khr_int64_base_atomics (the hash grid's parallel backward)
 
+  // A CPU that runs host functions in queue order on buffers it shares with the host (the
+  // host GEMM provider and the host passes, host/ops/native_call.hpp).
+  bool runs_native_calls() const { return (type & CL_DEVICE_TYPE_CPU) && native_kernels; }
   std::string type_name() const;  // "GPU", "CPU", "ACCELERATOR", ...
   std::string id() const;         // "P:D", the selector form
 };
