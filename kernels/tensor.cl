@@ -1,20 +1,20 @@
 // Data movement: column blocks for concatenation and its backward (split).
 
-// dst[r, offset + c] = src[r, c] for a src of src_cols columns inside dst of dst_cols.
+// dst[r, offset + c] = src[r, c] for a src of src_cols columns inside dst of dst_cols; a 2D
+// range (c, r) so that no work-item divides, and a CPU device vectorises along a row.
 __kernel void copy_cols(__global const float* src, __global float* dst, uint rows, uint src_cols,
                         uint dst_cols, uint offset) {
-  const uint i = get_global_id(0);
-  if (i >= rows * src_cols) return;
-  const uint r = i / src_cols, c = i % src_cols;
-  dst[(size_t)r * dst_cols + offset + c] = src[i];
+  const uint c = get_global_id(0), r = get_global_id(1);
+  if (c >= src_cols || r >= rows) return;
+  dst[(size_t)r * dst_cols + offset + c] = src[(size_t)r * src_cols + c];
 }
 
-// dsrc[r, c] (+)= ddst[r, offset + c].
+// dsrc[r, c] (+)= ddst[r, offset + c], over the same 2D range as copy_cols.
 __kernel void copy_cols_back(__global const float* ddst, __global float* dsrc, uint rows,
                              uint src_cols, uint dst_cols, uint offset, int accumulate) {
-  const uint i = get_global_id(0);
-  if (i >= rows * src_cols) return;
-  const uint r = i / src_cols, c = i % src_cols;
+  const uint c = get_global_id(0), r = get_global_id(1);
+  if (c >= src_cols || r >= rows) return;
+  const size_t i = (size_t)r * src_cols + c;
   const float g = ddst[(size_t)r * dst_cols + offset + c];
   dsrc[i] = accumulate ? dsrc[i] + g : g;
 }

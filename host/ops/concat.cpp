@@ -25,7 +25,7 @@ class ConcatOp final : public Op {
           .arg(ctx.in(i)).arg(ctx.out(0)).arg(detail::u32(rows, "rows"))
           .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
           .arg(detail::u32(offset, "offset"))
-          .run(rows * widths_[i]);
+          .run2(widths_[i], rows);
       offset += widths_[i];
     }
   }
@@ -40,7 +40,7 @@ class ConcatOp final : public Op {
             .arg(dy).arg(dx).arg(detail::u32(rows, "rows"))
             .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
             .arg(detail::u32(offset, "offset")).arg(static_cast<int>(ctx.accumulate_in(i)))
-            .run(rows * widths_[i]);
+            .run2(widths_[i], rows);
       offset += widths_[i];
     }
   }

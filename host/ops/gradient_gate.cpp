@@ -19,7 +19,7 @@ class GradientGateOp final : public Op {
     const unsigned c = detail::u32(cols_, "gate columns");
     ctx.launch("tensor", "copy_cols")
         .arg(ctx.in(0)).arg(ctx.out(0)).arg(detail::u32(rows_, "gate rows")).arg(c).arg(c)
-        .arg(0u).run(rows_ * cols_);
+        .arg(0u).run2(cols_, rows_);
   }
 
   void backward(ExecContext& ctx) override {
