@@ -125,9 +125,10 @@ __kernel void hashgrid_forward(__global const float* positions, __global const f
 }
 
 // d table: one work-item per (network, level).
-__kernel void hashgrid_backward(__global const float* positions, __global const float* dout,
+__kernel void hashgrid_backward(__global const float* restrict positions,
+                                __global const float* restrict dout,
                                 __constant float* res, __constant float* res_t,
-                                __global float* dtable, uint nets, uint rows, uint levels,
+                                __global float* restrict dtable, uint nets, uint rows, uint levels,
                                 uint table_size, float4 inv_bound, int accumulate) {
   const uint i = get_global_id(0);
   if (i >= nets * levels) return;
