@@ -89,6 +89,23 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   BOOST_TEST(more.err.find("resumed at step 9") != std::string::npos);
 }
 
+// A run trained with --holdout still renders every frame of its scene folder: --camera and
+// the default times count the held-out frames too (10 frames, every 4th held out).
+BOOST_AUTO_TEST_CASE(render_counts_held_out_frames) {
+  if (!has_cli()) return;
+  TempDir dir("cli-holdout");
+  const std::string scene = cached_tiny_scene().string(), run = (dir / "run").string();
+  Result t = nova_cli("train --scene " + scene + " --out " + run + " --holdout 4" + kTiny, dir);
+  BOOST_REQUIRE_MESSAGE(t.code == 0, t.err);
+  Result r = nova_cli("render --run " + run + " --out " + (dir / "frames").string() + " --camera 8 --no-masks", dir);
+  BOOST_REQUIRE_MESSAGE(r.code == 0, r.err);
+  for (const char* f : {"000.png", "004.png", "009.png"}) BOOST_TEST(fs::exists(dir / "frames" / f), f);
+  BOOST_TEST(!fs::exists(dir / "frames" / "010.png"));
+  Result bad = nova_cli("render --run " + run + " --out " + (dir / "none").string() + " --camera 10", dir);
+  BOOST_TEST(bad.code == 2);
+  BOOST_TEST(bad.err.find("the scene has frames 0..9") != std::string::npos, bad.err);
+}
+
 BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
   if (!has_cli()) return;
   TempDir dir("cli-bad");

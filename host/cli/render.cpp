@@ -1,7 +1,8 @@
 // `nova render --run RUN --out DIR`: renders a trained run. Without --compose: one camera
-// (a training camera, or --pose) at one time or at every frame's time, writing colour,
+// (a frame's camera, held-out frames included, or --pose) at one time or at every frame's time, writing colour,
 // depth and per-NeRF masks as PNG frames (and an MP4 with --video). With --compose SPEC:
 // every target of a composition spec (io/compose_spec_text.hpp), hard-blended (add_blend_options).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -31,6 +32,22 @@ Camera parse_pose(const std::string& text, Camera base) {
     if (!std::isfinite(x)) throw Error("--pose: '" + text + "' holds a non-finite number");
   base.c2w = m;
   return base;
+}
+
+// The scene folder's frames in their order, held-out ones included (a run trained with
+// --holdout keeps those as ground-truth views): --camera, a composition target's camera= and
+// the default times count every frame of the folder, as its file names do.
+struct SceneFrame {
+  Camera camera;
+  double time;
+};
+std::vector<SceneFrame> every_frame(const Scene& s) {
+  std::vector<SceneFrame> out;
+  for (const Frame& f : s.frames) out.push_back({f.camera, f.time});
+  for (const GroundTruthView& v : s.gt_views)
+    if (v.kind == "heldout") out.push_back({v.camera, v.time});
+  std::stable_sort(out.begin(), out.end(), [](const SceneFrame& a, const SceneFrame& b) { return a.time < b.time; });
+  return out;
 }
 
 std::string frame_name(size_t i) {
@@ -72,7 +89,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
   desc.add_options()("run", po::value<std::string>()->required(), "trained run folder")(
       "out", po::value<std::string>()->required(), "output folder (must not exist unless --force)")(
       "scene", po::value<std::string>()->default_value(""), "scene folder (default: the run's)")(
-      "camera", po::value<int>()->default_value(0), "training camera (frame index) to render from")(
+      "camera", po::value<int>()->default_value(0), "camera of frame I of the scene (held-out frames count) to render from")(
       "pose", po::value<std::string>(), "12 numbers: a camera-to-world 3x4 matrix (scene coordinates) instead of --camera")(
       "time", po::value<double>(), "object time in [-1, 1] (frame i of N has 2i/N - 1); default: every frame's time")(
       "compose", po::value<std::string>(), "composition spec: render each of its targets (see docs/rendering.md)")(
@@ -87,15 +104,17 @@ int render_rank(const Args& args, MpiJob* mpi) {
   const auto t0 = std::chrono::steady_clock::now();
   OpenRun run = open_run(vm["run"].as<std::string>(), vm["scene"].as<std::string>(), false);
   const Scene& scene = run.scene;
+  const std::vector<SceneFrame> all_frames = every_frame(scene);
+  const std::string frame_range = "0.." + std::to_string(all_frames.size() - 1);
   const bool masks = !vm["no-masks"].as<bool>();
   const BlendChoice blend = blend_choice(vm);
   ComposeSpec spec;
   if (vm.count("compose")) {
     spec = read_compose_spec(vm["compose"].as<std::string>());
     for (const ComposeTarget& t : spec.targets) {
-      if (t.camera < 0 || t.camera >= static_cast<int>(scene.frames.size()))
+      if (t.camera < 0 || t.camera >= static_cast<int>(all_frames.size()))
         throw Error("compose spec '" + vm["compose"].as<std::string>() + "', target '" + t.name + "': camera " +
-                    std::to_string(t.camera) + " is not a training frame (0.." + std::to_string(scene.frames.size() - 1) + ")");
+                    std::to_string(t.camera) + " is not a frame of the scene (" + frame_range + ")");
       for (const ComposeInstance& i : t.instances)
         if (i.object < 1 || i.object > scene.num_objects)
           throw Error("compose spec '" + vm["compose"].as<std::string>() + "', target '" + t.name + "': object " +
@@ -104,9 +123,9 @@ int render_rank(const Args& args, MpiJob* mpi) {
     }
   }
   const int cam = vm["camera"].as<int>();
-  if (cam < 0 || cam >= static_cast<int>(scene.frames.size()))
-    throw Error("--camera " + std::to_string(cam) + ": the scene has frames 0.." + std::to_string(scene.frames.size() - 1));
-  Camera camera = scene.frames[static_cast<size_t>(cam)].camera;
+  if (cam < 0 || cam >= static_cast<int>(all_frames.size()))
+    throw Error("--camera " + std::to_string(cam) + ": the scene has frames " + frame_range);
+  Camera camera = all_frames[static_cast<size_t>(cam)].camera;
   if (vm.count("pose")) camera = parse_pose(vm["pose"].as<std::string>(), camera);
 
   const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
@@ -126,7 +145,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
   } else if (!spec.empty()) {
     for (const ComposeTarget& t : spec.targets) {
       ViewRequest req;
-      req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
+      req.camera = all_frames[static_cast<size_t>(t.camera)].camera;
       req.background = t.background;
       req.hard_blend = blend.composition;
       for (size_t n = 0; n < t.instances.size(); ++n) {
@@ -150,7 +169,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
       if (!std::isfinite(t) || t < -1.0 || t > 1.0) throw Error("--time " + std::to_string(t) + " is outside [-1, 1]");
       times.push_back(t);
     } else {
-      for (const Frame& f : scene.frames) times.push_back(f.time);
+      for (const SceneFrame& f : all_frames) times.push_back(f.time);
     }
     for (size_t i = 0; i < times.size(); ++i) {
       if (mpi && static_cast<int>(i % static_cast<size_t>(mpi->size())) != mpi->rank()) continue;
