@@ -2,7 +2,6 @@
 // (a frame's camera, held-out frames included, or --pose) at one time or at every frame's time, writing colour,
 // depth and per-NeRF masks as PNG frames (and an MP4 with --video). With --compose SPEC:
 // every target of a composition spec (io/compose_spec_text.hpp), hard-blended (add_blend_options).
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +13,7 @@
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
 #include "nova/io/compose_spec_text.hpp"
+#include "nova/io/evaluation.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/io/visualize.hpp"
 #include "nova/runtime.hpp"
@@ -32,22 +32,6 @@ Camera parse_pose(const std::string& text, Camera base) {
     if (!std::isfinite(x)) throw Error("--pose: '" + text + "' holds a non-finite number");
   base.c2w = m;
   return base;
-}
-
-// The scene folder's frames in their order, held-out ones included (a run trained with
-// --holdout keeps those as ground-truth views): --camera, a composition target's camera= and
-// the default times count every frame of the folder, as its file names do.
-struct SceneFrame {
-  Camera camera;
-  double time;
-};
-std::vector<SceneFrame> every_frame(const Scene& s) {
-  std::vector<SceneFrame> out;
-  for (const Frame& f : s.frames) out.push_back({f.camera, f.time});
-  for (const GroundTruthView& v : s.gt_views)
-    if (v.kind == "heldout") out.push_back({v.camera, v.time});
-  std::stable_sort(out.begin(), out.end(), [](const SceneFrame& a, const SceneFrame& b) { return a.time < b.time; });
-  return out;
 }
 
 std::string frame_name(size_t i) {
@@ -104,7 +88,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
   const auto t0 = std::chrono::steady_clock::now();
   OpenRun run = open_run(vm["run"].as<std::string>(), vm["scene"].as<std::string>(), false);
   const Scene& scene = run.scene;
-  const std::vector<SceneFrame> all_frames = every_frame(scene);
+  const std::vector<FolderFrame> all_frames = folder_frames(scene);
   const std::string frame_range = "0.." + std::to_string(all_frames.size() - 1);
   const bool masks = !vm["no-masks"].as<bool>();
   const BlendChoice blend = blend_choice(vm);
@@ -169,7 +153,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
       if (!std::isfinite(t) || t < -1.0 || t > 1.0) throw Error("--time " + std::to_string(t) + " is outside [-1, 1]");
       times.push_back(t);
     } else {
-      for (const SceneFrame& f : all_frames) times.push_back(f.time);
+      for (const FolderFrame& f : all_frames) times.push_back(f.time);
     }
     for (size_t i = 0; i < times.size(); ++i) {
       if (mpi && static_cast<int>(i % static_cast<size_t>(mpi->size())) != mpi->rank()) continue;

@@ -20,6 +20,16 @@ Scene load_training_scene(const std::string& dir, const TrainConfig& config, boo
   return s;
 }
 
+std::vector<FolderFrame> folder_frames(const Scene& scene) {
+  std::vector<FolderFrame> out;
+  for (const Frame& f : scene.frames) out.push_back({f.camera, f.time});
+  for (const GroundTruthView& v : scene.gt_views)
+    if (v.kind == "heldout") out.push_back({v.camera, v.time});
+  // Frame i has time 2i/N - 1: time order is the folder's order.
+  std::stable_sort(out.begin(), out.end(), [](const FolderFrame& a, const FolderFrame& b) { return a.time < b.time; });
+  return out;
+}
+
 std::vector<GroundTruthView> split_views(Scene& split_scene, const std::string& split) {
   std::vector<GroundTruthView> views;
   for (size_t i = 0; i < split_scene.frames.size(); ++i) {
@@ -60,12 +70,13 @@ std::vector<ViewScore> score_views(ViewRenderer& renderer, int num_objects, cons
 std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene& scene, bool hard_blend,
                                              const RenderSink& sink) {
   std::vector<ViewScore> scores;
+  const std::vector<FolderFrame> frames = folder_frames(scene);
   for (size_t i = 0; i < scene.compose.targets.size(); ++i) {
     const ComposeTarget& t = scene.compose.targets[i];
     const Image8* gt = nullptr;
     for (const auto& c : scene.compose_gt)
       if (c.name == t.name) gt = &c.rgb;
-    if (!gt || t.camera < 0 || t.camera >= static_cast<int>(scene.frames.size())) continue;
+    if (!gt || t.camera < 0 || t.camera >= static_cast<int>(frames.size())) continue;
     // Objects alone where none is in view: a black truth that a black render matches exactly
     // (PSNR "infinite", 361 in OpenCV's number), which would swamp every mean it entered.
     if (!t.background && std::all_of(gt->data.begin(), gt->data.end(), [](uint8_t v) { return v == 0; })) {
@@ -73,7 +84,7 @@ std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene
       continue;
     }
     ViewRequest req;
-    req.camera = scene.frames[static_cast<size_t>(t.camera)].camera;
+    req.camera = frames[static_cast<size_t>(t.camera)].camera;
     req.background = t.background;
     req.hard_blend = hard_blend;
     for (const ComposeInstance& inst : t.instances) {

@@ -20,6 +20,15 @@ namespace nova {
 Scene load_training_scene(const std::string& dir, const TrainConfig& config, bool load_gt = false,
                           const std::string& split = "train");
 
+// A frame of the scene folder: its camera and time. Camera indices (`nova render --camera`, a
+// composition target's camera=) count every frame of the folder in its order, the held-out
+// frames of a --holdout run (kept as "heldout" ground-truth views) included.
+struct FolderFrame {
+  Camera camera;
+  double time;
+};
+std::vector<FolderFrame> folder_frames(const Scene& scene);
+
 struct ViewScore {
   std::string name;  // the view's name as a file stem ('/' -> '_', no ".png")
   double psnr = 0, ssim = 0;
