@@ -141,11 +141,12 @@ int mlp(const Args& args) {
   const Options o(args, {{"batches", "16384,65536"}, {"repeats", "3"}, {"device", ""},
                          {"width", "256"}, {"depth", "8"},
                          {"gemm", "tuned"}, {"layer", "256"}, {"fused-widths", "64,256"},
-                         {"torch", "auto"}, {"torch-threads", "0"}});
+                         {"torch", "auto"}, {"torch-threads", "0"}, {"torch-device", "cpu"}});
   if (o.help()) {
     std::cout << o.usage("nova-bench mlp")
               << "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path\n"
-                 "--torch-threads: PyTorch's threads (0: this machine's hardware threads)\n";
+                 "--torch-threads: PyTorch's threads (0: this machine's hardware threads)\n"
+                 "--torch-device: PyTorch's device, cpu or cuda (a GPU's nova beside PyTorch on the same GPU)\n";
     return 0;
   }
   const int repeats = static_cast<int>(o.integer("repeats"));
@@ -303,7 +304,8 @@ int mlp(const Args& args) {
   std::ostringstream torch_csv;
   std::cout << "\n";
   compare_with_torch(rt, c, o.integers("batches"), repeats, torch_python(o.str("torch")),
-                     static_cast<int>(o.integer("torch-threads")), std::cout, torch_csv);
+                     static_cast<int>(o.integer("torch-threads")), o.str("torch-device"), std::cout,
+                     torch_csv);
   std::cout << "\n(device = the whole graph: GEMMs, bias + activation, concat, loss; host BLAS "
                "= the GEMMs alone; 2-op = the same network of linear + bias_act ops)\n\n"
             << profile << "\nCSV\n" << csv.str() << "\nCSV (layer GEMMs)\n" << layer_csv.str()

@@ -13,8 +13,8 @@
 namespace nova::bench {
 
 void compare_with_torch(Runtime& rt, const MlpConfig& c, const std::vector<long>& batches,
-                        int repeats, const std::string& python, int threads, std::ostream& out,
-                        std::ostream& csv) {
+                        int repeats, const std::string& python, int threads,
+                        const std::string& device, std::ostream& out, std::ostream& csv) {
   csv << "batch,pass,nova_samples_per_s,torch_samples_per_s,nova_over_torch,torch\n";
   if (python.empty()) {
     out << "PyTorch: not compared (--torch off, or no /usr/bin/python3)\n";
@@ -25,7 +25,7 @@ void compare_with_torch(Runtime& rt, const MlpConfig& c, const std::vector<long>
     const size_t m = static_cast<size_t>(batch_l);
     for (bool train : {false, true}) {
       std::string why;
-      TorchMlpShape shape{m, kMlpInputs, c.width, c.depth, c.skip, threads, !train};
+      TorchMlpShape shape{m, kMlpInputs, c.width, c.depth, c.skip, threads, device, !train};
       std::unique_ptr<TorchPeer> peer = TorchPeer::start(python, shape, why);
       if (!peer) {
         out << "PyTorch: not compared (" << why << ")\n";

@@ -8,7 +8,10 @@ DEPTH x WIDTH ReLU layers, the input concatenated again after layer index SKIP, 
 outputs, an MSE loss against a constant target, and one Adam update per step (PyTorch's Adam,
 the formulation nova's optimiser follows).
 
-usage: torch_mlp.py BATCH [--threads N] [--inputs 63] [--width 256] [--depth 8] [--skip 4] [--forward-only]
+usage: torch_mlp.py BATCH [--threads N] [--device cpu|cuda] [--inputs 63] [--width 256] [--depth 8] [--skip 4]
+                    [--forward-only]
+On a CUDA device each timed step ends with torch.cuda.synchronize(), as nova's ends with
+clFinish: both times cover the whole step's device work.
 Prints "ready torch VERSION threads N" once the first (warm-up) step is done, or
 "unavailable: REASON" and exits 3 where torch cannot be imported.
 """
@@ -21,6 +24,7 @@ def main():
     p = argparse.ArgumentParser()
     p.add_argument("batch", type=int)
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--device", default="cpu")
     p.add_argument("--inputs", type=int, default=63)
     p.add_argument("--width", type=int, default=256)
     p.add_argument("--depth", type=int, default=8)
@@ -34,6 +38,13 @@ def main():
         return 3
     torch.set_num_threads(a.threads)
     torch.manual_seed(0)
+    if a.device != "cpu" and not (a.device.startswith("cuda") and torch.cuda.is_available()):
+        print(f"unavailable: torch {torch.__version__} has no device {a.device}", flush=True)
+        return 3
+    dev = torch.device(a.device)
+    # float32 as nova computes: no TF32 matrix units (PyTorch's default for matmul, said outright).
+    torch.backends.cuda.matmul.allow_tf32 = False
+    torch.backends.cudnn.allow_tf32 = False
 
     class Mlp(torch.nn.Module):
         def __init__(self):
@@ -53,10 +64,11 @@ def main():
                     h = torch.cat([x, h], dim=-1)
             return self.out(h)
 
-    net = Mlp()
+    net = Mlp().to(dev)
     opt = torch.optim.Adam(net.parameters(), lr=5e-4)
-    x = torch.full((a.batch, a.inputs), 0.1)
-    target = torch.full((a.batch, 4), 0.5)
+    x = torch.full((a.batch, a.inputs), 0.1, device=dev)
+    target = torch.full((a.batch, 4), 0.5, device=dev)
+    sync = torch.cuda.synchronize if dev.type == "cuda" else (lambda: None)
 
     def step():
         if a.forward_only:
@@ -69,12 +81,16 @@ def main():
         opt.step()
 
     step()
-    print(f"ready torch {torch.__version__} threads {torch.get_num_threads()}", flush=True)
+    sync()
+    where = torch.cuda.get_device_name(dev) if dev.type == "cuda" else f"threads {torch.get_num_threads()}"
+    print(f"ready torch {torch.__version__} {where}", flush=True)
     for line in sys.stdin:
         if line.strip() != "step":
             continue
+        sync()
         t0 = time.perf_counter()
         step()
+        sync()
         print(f"{time.perf_counter() - t0:.9f}", flush=True)
     return 0
 

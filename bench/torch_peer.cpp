@@ -34,7 +34,7 @@ std::unique_ptr<TorchPeer> TorchPeer::start(const std::string& python, const Tor
   std::vector<std::string> args = {python, "-c", kTorchMlpScript, std::to_string(s.batch),
                                    "--threads", std::to_string(threads), "--inputs", std::to_string(s.inputs),
                                    "--width", std::to_string(s.width), "--depth", std::to_string(s.depth),
-                                   "--skip", std::to_string(s.skip)};
+                                   "--skip", std::to_string(s.skip), "--device", s.device};
   if (s.forward_only) args.push_back("--forward-only");
   const pid_t pid = fork();
   if (pid < 0) throw Error("nova-bench: cannot start " + python);

@@ -12,6 +12,7 @@ struct TorchMlpShape {
   size_t batch = 65536;
   int inputs = 63, width = 256, depth = 8, skip = 4;
   int threads = 0;  // 0: this machine's hardware threads
+  std::string device = "cpu";  // PyTorch's device: cpu, or cuda[:N] (each step then synchronises)
   bool forward_only = false;
 };
 

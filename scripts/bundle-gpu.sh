@@ -76,11 +76,13 @@ if grep -q '"/usr/' "$OUT/usr/lib/$ARCH/cmake/CLBlast/CLBlastConfig-none.cmake";
   exit 1
 fi
 
-# Boost headers: those a Boost.Test suite includes (the compiler's own list, with and without
-# BOOST_TEST_MODULE), plus all of boost/config and boost/test, whose choice of files depends
-# on the compiler and its version (the GPU machine's g++ may differ from this one).
-printf '#define BOOST_TEST_MODULE m\n#define BOOST_TEST_DYN_LINK\n#include <boost/test/unit_test.hpp>\n' >"$work/a.cpp"
-printf '#define BOOST_TEST_DYN_LINK\n#include <boost/test/unit_test.hpp>\n' >"$work/b.cpp"
+# Boost headers: those the suites include (every Boost header named in tests/, data-driven
+# cases too; the compiler's own list, with and without BOOST_TEST_MODULE), plus all of
+# boost/config and boost/test, whose choice of files depends on the compiler and its version
+# (the GPU machine's g++ may differ from this one).
+boost_includes=$(grep -ho '#include <boost/[^>]*>' tests/*.cpp tests/*.hpp | sort -u)
+printf '#define BOOST_TEST_MODULE m\n#define BOOST_TEST_DYN_LINK\n%s\n' "$boost_includes" >"$work/a.cpp"
+printf '#define BOOST_TEST_DYN_LINK\n%s\n' "$boost_includes" >"$work/b.cpp"
 dest=$(mkdir -p "$OUT/usr/include" && cd "$OUT/usr/include" && pwd)
 {
   for tu in a b; do g++ -std=c++20 -I"$root/usr/include" -M "$work/$tu.cpp"; done |
