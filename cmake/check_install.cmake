@@ -44,8 +44,22 @@ foreach(f IN LISTS package_files)
   endif()
 endforeach()
 
-step("configure examples against the prefix" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples -B ${WORK_DIR}/examples
-     -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=Release)
+# The dependencies where the build found them (DEP_PREFIXES, '|'-separated; CLBLAST_DIR,
+# OPENCL_LIBRARY, OPENCL_INCLUDE_DIR): system paths on Debian, a bundle on a GPU machine. They
+# reach the configure below through an initial cache file (-C), which keeps lists whole.
+string(REPLACE "|" ";" dep_prefixes "${DEP_PREFIXES}")
+set(initial "set(CMAKE_PREFIX_PATH \"${prefix};${dep_prefixes}\" CACHE STRING \"\")\n")
+foreach(v CLBlast_DIR:CLBLAST_DIR OpenCL_LIBRARY:OPENCL_LIBRARY OpenCL_INCLUDE_DIR:OPENCL_INCLUDE_DIR)
+  string(REPLACE ":" ";" pair ${v})
+  list(GET pair 0 name)
+  list(GET pair 1 given)
+  if(NOT "${${given}}" STREQUAL "")
+    string(APPEND initial "set(${name} \"${${given}}\" CACHE PATH \"\")\n")
+  endif()
+endforeach()
+file(WRITE ${WORK_DIR}/dependencies.cmake "${initial}")
+step("configure examples against the prefix" ${CMAKE_COMMAND} -C ${WORK_DIR}/dependencies.cmake
+     -S ${SOURCE_DIR}/examples -B ${WORK_DIR}/examples -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=Release)
 step("build examples" ${CMAKE_COMMAND} --build ${WORK_DIR}/examples)
 step("run embed_core (CMake package)" ${WORK_DIR}/examples/embed_core)
 
@@ -54,13 +68,23 @@ if(NOT PKG_CONFIG)
   message(STATUS "no pkg-config on this machine: the pkg-config build is left out")
   return()
 endif()
-set(ENV{PKG_CONFIG_PATH} ${prefix}/lib/pkgconfig)
+set(pc_path ${prefix}/lib/pkgconfig)
+foreach(d IN LISTS dep_prefixes)
+  string(APPEND pc_path ":${d}/lib/x86_64-linux-gnu/pkgconfig:${d}/lib/pkgconfig:${d}/share/pkgconfig")
+endforeach()
+set(ENV{PKG_CONFIG_PATH} ${pc_path})
 execute_process(COMMAND ${PKG_CONFIG} --cflags --libs nova RESULT_VARIABLE rc OUTPUT_VARIABLE flags
                 ERROR_VARIABLE err OUTPUT_STRIP_TRAILING_WHITESPACE)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "pkg-config nova failed: ${err}")
 endif()
 separate_arguments(flags UNIX_COMMAND "${flags}")
+# Libraries outside the loader's own paths (a bundle's) are found at run time through an RPATH.
+foreach(f IN LISTS flags)
+  if(f MATCHES "^-L(.+)$" AND NOT CMAKE_MATCH_1 MATCHES "^/usr/lib")
+    list(APPEND flags "-Wl,-rpath,${CMAKE_MATCH_1}")
+  endif()
+endforeach()
 step("compile embed_core with pkg-config" ${CXX} -std=c++20 -O2 ${SOURCE_DIR}/examples/embed_core.cpp ${flags}
      -o ${WORK_DIR}/embed_core_pc)
 step("run embed_core (pkg-config)" ${WORK_DIR}/embed_core_pc)

@@ -66,6 +66,11 @@ cp -a "$lib"/libOpenCL.so* "$lib"/libclblast.so* "$lib"/libboost_unit_test_frame
 cp -a "$lib/cmake/CLBlast" "$lib/cmake/Boost-1.74.0" "$lib/cmake/boost_headers-1.74.0" \
       "$lib/cmake/boost_unit_test_framework-1.74.0" "$lib/cmake/BoostDetectToolset-1.74.0.cmake" \
       "$OUT/usr/lib/$ARCH/cmake/"
+# pkg-config files of OpenCL and CLBlast (nova.pc requires both), relocated to the bundle.
+mkdir -p "$OUT/usr/lib/$ARCH/pkgconfig"
+for pc in OpenCL clblast; do
+  sed 's#^prefix=/usr$#prefix=${pcfiledir}/../../..#' "$lib/pkgconfig/$pc.pc" >"$OUT/usr/lib/$ARCH/pkgconfig/$pc.pc"
+done
 # The static Boost.Test library is not bundled, so neither is its CMake variant.
 rm -f "$OUT/usr/lib/$ARCH/cmake/boost_unit_test_framework-1.74.0/"*-variant-static.cmake
 # CLBlast's package names the system's loader by absolute path; point it into the bundle.

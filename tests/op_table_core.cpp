@@ -114,11 +114,16 @@ OpEntry bias_act_entry() {
       e.shapes.push_back({{13, 7, batch}, a, std::string(activation_name(kActivations[a])) + ", 13 x 7 x " + std::to_string(batch)});
   e.shapes.push_back({{1, 7, 1}, 2, "sigmoid, 1 x 7"});
   e.shapes.push_back({{37, 5, 2}, 3, "softplus, 2 x 37 x 5"});
-  // dims[3] = 1: the strided bias gradient (NOVA_BIAS_GRAD=strided, what a GPU runs; a CPU
-  // walks rows), every activation at 1009 rows of three networks and at 13 x 7.
-  for (int a = 0; a < 4; ++a) {
-    e.shapes.push_back({{kOddRows, 7, 3, 1}, a, std::string(activation_name(kActivations[a])) + ", 1009 x 7 x 3, strided"});
-    e.shapes.push_back({{13, 7, 1, 1}, a, std::string(activation_name(kActivations[a])) + ", 13 x 7, strided"});
+  // dims[3] = 1: the strided bias gradient (NOVA_BIAS_GRAD=strided, what a GPU runs), and
+  // dims[3] = 2: the row walk (NOVA_BIAS_GRAD=row-walk, a CPU's kernel), so that every device
+  // runs both kernels whatever its own choice; every activation at 1009 rows of three networks
+  // and at 13 x 7.
+  for (int walk : {1, 2}) {
+    const std::string name = walk == 1 ? ", strided" : ", row-walk";
+    for (int a = 0; a < 4; ++a) {
+      e.shapes.push_back({{kOddRows, 7, 3, size_t(walk)}, a, std::string(activation_name(kActivations[a])) + ", 1009 x 7 x 3" + name});
+      e.shapes.push_back({{13, 7, 1, size_t(walk)}, a, std::string(activation_name(kActivations[a])) + ", 13 x 7" + name});
+    }
   }
   e.build = [](Graph& g, const OpShape& s) {
     const size_t rows = s.dims[0], cols = s.dims[1], batch = s.dims[2];
@@ -167,9 +172,10 @@ OpEntry bias_act_entry() {
   e.fd = GradCheckOptions{};
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 8; };
   // The bias gradient's summation is chosen by NOVA_BIAS_GRAD when the op runs: the strided
-  // shapes ask for the strided one, the rest run the device's own.
+  // and row-walk shapes ask for theirs, the rest run the device's own.
   e.prepare = [](const OpShape& s, const Runtime&) -> std::string {
     if (s.dims.size() > 3 && s.dims[3] == 1) setenv("NOVA_BIAS_GRAD", "strided", 1);
+    if (s.dims.size() > 3 && s.dims[3] == 2) setenv("NOVA_BIAS_GRAD", "row-walk", 1);
     return "";
   };
   e.restore = [] { unsetenv("NOVA_BIAS_GRAD"); };

@@ -6,6 +6,7 @@
 #include "nova/executor.hpp"
 #include "nova/mlp.hpp"
 #include "nova/ops.hpp"
+#include "nova/tuning.hpp"
 
 using namespace nova;
 
@@ -99,6 +100,41 @@ BOOST_AUTO_TEST_CASE(reference_mlp_plan_needs_less_than_all_tensors) {
   const size_t expected = (63 * 256 + 256) + 4 * (256 * 256 + 256) + (319 * 256 + 256) +
                           2 * (256 * 256 + 256) + (256 * 4 + 4);
   BOOST_TEST(ex.parameter_count() == expected);
+}
+
+// The two arena layouts (nova/tuning.hpp) run the same ops on the same values: loss, output
+// and every parameter gradient agree bit for bit; the planned arena reuses memory (its
+// sub-buffers overlap), the separate one gives each tensor a buffer of its own.
+BOOST_AUTO_TEST_CASE(separate_buffers_give_the_arenas_bits) {
+  const auto run = [](const char* layout) {
+    setenv("NOVA_ARENA", layout, 1);
+    Graph g;
+    Tensor x = g.input("x", Shape{301, 3});
+    Tensor target = g.input("target", Shape{301, 4});
+    MlpConfig c;
+    c.depth = 4;
+    c.width = 32;
+    c.skip = 1;
+    Tensor y = build_mlp(positional_encoding(x, 3), c).output;
+    g.keep(y);
+    g.set_loss(mse(y, target));
+    Executor ex(test::runtime(), g);
+    unsetenv("NOVA_ARENA");
+    ex.set(x, test::random_floats(301 * 3, -1, 1, 5));
+    ex.set(target, test::random_floats(301 * 4, 0, 1, 6));
+    ex.forward();
+    ex.backward();
+    std::vector<std::vector<float>> out{ex.get(y), ex.get(g.loss())};
+    for (Tensor w : g.parameters()) out.push_back(ex.get_grad(w));
+    return out;
+  };
+  const auto arena = run("sub-buffers"), separate = run("separate");
+  BOOST_TEST(arena.size() == separate.size());
+  for (size_t i = 0; i < arena.size() && i < separate.size(); ++i)
+    BOOST_TEST(arena[i] == separate[i], boost::test_tools::per_element());
+  setenv("NOVA_ARENA", "shared", 1);
+  BOOST_CHECK_THROW(arena_layout(test::runtime().info()), Error);
+  unsetenv("NOVA_ARENA");
 }
 
 BOOST_AUTO_TEST_CASE(inference_graph_frees_activations_early) {

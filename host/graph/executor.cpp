@@ -1,4 +1,5 @@
 #include "nova/executor.hpp"
+#include "nova/tuning.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -204,7 +205,10 @@ void Executor::allocate() {
                     std::to_string(rt_.info().max_alloc_bytes >> 20) +
                     " MiB): use a smaller batch",
                 kExitUsage);
-  arena_ = rt_.alloc(plan_.peak_bytes);
+  // A guarded executor keeps the arena whatever the device: its regions never overlap, and
+  // the guards are checked in it.
+  const bool separate = !guard && arena_layout(rt_.info()) == ArenaLayout::Separate;
+  if (!separate) arena_ = rt_.alloc(plan_.peak_bytes);
   values_.resize(nt);
   grads_.resize(nt);
   fwd_workspace_.resize(nn);
@@ -219,7 +223,7 @@ void Executor::allocate() {
     }
   }
   for (size_t i = 0; i < lives.size(); ++i) {
-    Buffer b = rt_.sub_buffer(arena_, plan_.offsets[i] + guard, bytes[i]);
+    Buffer b = separate ? rt_.alloc(bytes[i]) : rt_.sub_buffer(arena_, plan_.offsets[i] + guard, bytes[i]);
     auto [kind, index] = owner[i];
     (kind == 0 ? values_ : kind == 1 ? grads_ : kind == 2 ? fwd_workspace_ : bwd_workspace_)[index] =
         std::move(b);

@@ -128,6 +128,18 @@ BiasGradWalk bias_grad_walk(const DeviceInfo& d) {
   return entry == BiasGradWalk::Host && !native ? BiasGradWalk::Rows : entry;
 }
 
+ArenaLayout arena_layout(const DeviceInfo& d) {
+  const char* env = std::getenv("NOVA_ARENA");
+  const std::string want = env ? env : "";
+  if (want == "sub-buffers") return ArenaLayout::SubBuffers;
+  if (want == "separate") return ArenaLayout::Separate;
+  if (!want.empty() && want != "auto")
+    throw Error("NOVA_ARENA='" + want + "': expected auto, sub-buffers or separate", kExitUsage);
+  const bool nvidia = lower(d.platform_name).find("nvidia") != std::string::npos ||
+                      lower(d.vendor).find("nvidia") != std::string::npos;
+  return nvidia ? ArenaLayout::Separate : ArenaLayout::SubBuffers;
+}
+
 const DeviceTuning& device_tuning(const DeviceInfo& device) {
   static const DeviceTuning defaults{"clblast-defaults", std::nullopt, std::nullopt};
   static const DeviceTuning pocl = pocl_cpu();

@@ -80,6 +80,17 @@ enum class BiasGradWalk { Strided, Rows, Host };
 // a device without native kernels.
 BiasGradWalk bias_grad_walk(const DeviceInfo& device);
 
+// Where an executor's activations, their gradients and the workspaces live. SubBuffers: one
+// arena sized by the memory plan, each tensor a sub-buffer at its planned offset (tensors whose
+// lifetimes do not meet share memory). Separate: a buffer per tensor, nothing shared. NVIDIA's
+// OpenCL driver (580.159, H100) crashed inside clReleaseMemObject when an executor whose
+// sub-buffers overlap was destroyed (docs/known-issues.md), so NVIDIA devices take Separate;
+// guarded executors (tests) always keep the arena, whose regions never overlap.
+enum class ArenaLayout { SubBuffers, Separate };
+// NOVA_ARENA=auto|sub-buffers|separate chooses; auto: Separate on NVIDIA platforms, else
+// SubBuffers. Error (exit 2) for another value.
+ArenaLayout arena_layout(const DeviceInfo& device);
+
 // kernels/activation.cl's ACT, and the GEMM epilogue's GEMM_BIAS_ACT (kernels/gemm.cl): the
 // activation's number (ops.hpp's Activation).
 struct ActivationParams {
