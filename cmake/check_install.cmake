@@ -81,8 +81,11 @@ endif()
 separate_arguments(flags UNIX_COMMAND "${flags}")
 # Libraries outside the loader's own paths (a bundle's) are found at run time through an RPATH.
 foreach(f IN LISTS flags)
-  if(f MATCHES "^-L(.+)$" AND NOT CMAKE_MATCH_1 MATCHES "^/usr/lib")
-    list(APPEND flags "-Wl,-rpath,${CMAKE_MATCH_1}")
+  if(f MATCHES "^-L(.+)$")
+    set(dir "${CMAKE_MATCH_1}")
+    if(NOT dir MATCHES "^/usr/lib")
+      list(APPEND flags "-Wl,-rpath,${dir}")
+    endif()
   endif()
 endforeach()
 step("compile embed_core with pkg-config" ${CXX} -std=c++20 -O2 ${SOURCE_DIR}/examples/embed_core.cpp ${flags}
