@@ -96,18 +96,11 @@ std::vector<GemmProvider> providers() {
   return p;
 }
 
-// Every case through each provider, and CLBlast once more with A^T written out first (a GPU's
-// default, DeviceTuning::clblast_transpose_a; a no-op for products without A^T); the device's
-// own choices are restored afterwards.
+// Every case through each provider; the device's own choice is restored afterwards.
 void run_case(const Case& c, float beta) {
   Runtime& rt = test::runtime();
   const GemmProvider chosen = gemm_provider(rt);
   for (GemmProvider p : providers()) run_case_with(p, c, beta);
-  for (const char* transpose : {"on", "off"}) {
-    setenv("NOVA_CLBLAST_TRANSPOSE_A", transpose, 1);
-    run_case_with(GemmProvider::CLBlast, c, beta, /*in_arena=*/c.ta);
-  }
-  unsetenv("NOVA_CLBLAST_TRANSPOSE_A");
   set_gemm_provider(rt, chosen);
 }
 

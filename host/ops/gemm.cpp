@@ -167,42 +167,6 @@ void blocked_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
   }
 }
 
-// CLBlast's A^T B as A^T written out (into `temp` when it holds it) and a plain product, where
-// the device's entry asks for it (DeviceTuning::clblast_transpose_a). The plain product then
-// allocates its own scratch, as CLBlast does without a workspace.
-bool writes_a_transposed(Runtime& rt, const GemmArgs& g) {
-  return g.trans_a && !g.trans_b && clblast_transposes_a(rt.info());
-}
-
-void clblast_with_transposed_a(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem temp) {
-  if (!writes_a_transposed(rt, g)) return clblast_gemm(rt, cfg, g, temp);
-  using detail::u32;
-  const size_t bytes = g.batch * g.m * g.k * sizeof(float);
-  Buffer own;
-  if (temp) {
-    size_t have = 0;
-    cl_check(clGetMemObjectInfo(temp, CL_MEM_SIZE, sizeof(have), &have, nullptr),
-             "clGetMemObjectInfo(gemm temp)");
-    if (have < bytes) temp = nullptr;
-  }
-  if (!temp) {
-    own = rt.alloc(bytes);
-    temp = own.get();
-  }
-  // A stored [k, m] (leading dimension lda) -> A^T [m, k], one matrix per batch entry.
-  rt.launch("gemm", "gemm_transpose")
-      .arg(g.a).arg(temp).arg(u32(g.k, "gemm k")).arg(u32(g.m, "gemm m"))
-      .arg(u32(g.lda, "gemm lda")).arg(u32(g.stride_a, "gemm stride_a"))
-      .arg(u32(g.batch, "gemm batch"))
-      .run2(g.k, g.m * g.batch);
-  GemmArgs plain = g;
-  plain.trans_a = false;
-  plain.a = temp;
-  plain.lda = g.k;
-  plain.stride_a = g.m * g.k;
-  clblast_gemm(rt, cfg, plain, nullptr);
-}
-
 const GemmConfig& table_config() {
   static const GemmConfig c;  // "clblast" without parameters: the device's table entry
   return c;
@@ -281,7 +245,7 @@ void gemm_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem tem
   }
   if (cfg.provider == "blocked") return blocked_gemm(rt, cfg, g, temp, epi);
   if (cfg.provider == "host") return host_gemm(rt, g, epi);
-  if (cfg.provider == "clblast") return clblast_with_transposed_a(rt, cfg, g, temp);
+  if (cfg.provider == "clblast") return clblast_gemm(rt, cfg, g, temp);
   throw Error("unknown GEMM provider '" + cfg.provider + "'");
 }
 
@@ -290,7 +254,6 @@ size_t gemm_temp_bytes_with(Runtime& rt, const GemmConfig& cfg, const GemmArgs& 
   if (cfg.provider == "kernels") return own_temp_floats(g) * sizeof(float);
   if (cfg.provider == "blocked") return blocked_temp_floats(g, blocked_gemm_params(cfg)) * sizeof(float);
   if (cfg.provider == "host") return 0;
-  if (writes_a_transposed(rt, g)) return g.batch * g.m * g.k * sizeof(float);
   return clblast_temp_bytes(rt, cfg, g);
 }
 

@@ -38,8 +38,6 @@ DeviceTuning pocl_cpu() {
   // A host function reading whole rows: 65536 x 256 in about 6 ms on 2 cores, where the
   // kernel's work-items, each reading 32 bytes of every 1 KiB row, took about 30.
   t.bias_grad = BiasGradWalk::Host;
-  // The tuned Xgemm above takes A^T B at the plain product's rate; a copy of A would only add.
-  t.clblast_transpose_a = false;
   return t;
 }
 
@@ -128,16 +126,6 @@ BiasGradWalk bias_grad_walk(const DeviceInfo& d) {
     throw Error("NOVA_BIAS_GRAD='" + want + "': expected auto, host, row-walk or strided", kExitUsage);
   const BiasGradWalk entry = device_tuning(d).bias_grad;
   return entry == BiasGradWalk::Host && !native ? BiasGradWalk::Rows : entry;
-}
-
-bool clblast_transposes_a(const DeviceInfo& d) {
-  const char* env = std::getenv("NOVA_CLBLAST_TRANSPOSE_A");
-  const std::string want = env ? env : "";
-  if (want == "on") return true;
-  if (want == "off") return false;
-  if (!want.empty() && want != "auto")
-    throw Error("NOVA_CLBLAST_TRANSPOSE_A='" + want + "': expected auto, on or off", kExitUsage);
-  return device_tuning(d).clblast_transpose_a;
 }
 
 ArenaLayout arena_layout(const DeviceInfo& d) {

@@ -129,15 +129,7 @@ struct DeviceTuning {
   // a work-item per column and part reading rows `parts` apart: the same sums, in the order a
   // CPU's caches and prefetchers read fastest.
   BiasGradWalk bias_grad = BiasGradWalk::Strided;
-  // CLBlast's A^T B (the weight gradient dW = X^T dY) as A^T written out first (gemm.cl's
-  // gemm_transpose) and then a plain product: on an H100 with CLBlast's own parameters the
-  // transposed-A product ran at 2.8 TFLOP/s against 22 for the plain one.
-  bool clblast_transpose_a = true;
 };
-
-// NOVA_CLBLAST_TRANSPOSE_A=auto|on|off: whether the CLBlast provider writes A^T out before an
-// A^T B product (auto: the device's entry). Error (exit 2) for another value.
-bool clblast_transposes_a(const DeviceInfo& device);
 
 // The entry for a device ("clblast-defaults": nothing overridden).
 const DeviceTuning& device_tuning(const DeviceInfo& device);
