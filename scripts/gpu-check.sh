@@ -2,7 +2,7 @@
 # One pass over a GPU machine that has the driver, a compiler and CMake but no packages: builds
 # nova from bundle/ (scripts/bundle-gpu.sh), runs the test suites of that build on the GPU, then
 # the benchmarks that need no scene, and writes what it saw to OUT_DIR (at most 8 files):
-#   machine.txt   GPU, driver, OpenCL devices as nova sees them, compiler, CMake
+#   machine.txt   GPU, driver, compiler, CMake, torch, and the device embed_core runs on
 #   build.log     the build          ctest.log   the suites, one line each, failures in full
 #   mlp.txt       nova-bench mlp (beside PyTorch on the same GPU where python3 has CUDA torch)
 #   render.txt    nova-bench render  ops.txt     nova-bench ops (every op at its largest shape)
