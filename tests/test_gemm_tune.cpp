@@ -5,6 +5,7 @@
 #include <boost/test/unit_test.hpp>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <unistd.h>
@@ -79,7 +80,7 @@ double run_and_check(const GemmConfig& cfg, bool ta, bool tb, size_t m, size_t n
 BOOST_AUTO_TEST_SUITE(gemm_tune)
 
 BOOST_AUTO_TEST_CASE(config_strings_round_trip) {
-  for (const char* text : {"clblast", "kernels", "blocked KC=256 RM=6 TA=1 VN=2",
+  for (const char* text : {"clblast", "clblast KC=2048", "kernels", "blocked KC=256 RM=6 TA=1 VN=2",
                            "clblast KWG=16 MWG=64 NWG=64"})
     BOOST_TEST(GemmConfig::parse(text).str() == text);
   for (const char* bad : {"", "cublas", "blocked RM=x", "blocked RM=-1", "blocked RM=99",
@@ -256,6 +257,46 @@ BOOST_AUTO_TEST_CASE(blocked_configs_match_float64) {
     }
   }
   BOOST_TEST(seen.size() >= 5u);
+}
+
+// Split-K through CLBlast (KC=n): every transposition CLBlast takes, a ragged last chunk
+// (k = 131 in chunks of 40: three full chunks in one strided-batched call, then the
+// remainder), exact chunks (k = 120), one chunk (no split), batches, alpha and beta; the
+// search proposes it for the weight gradient.
+BOOST_AUTO_TEST_CASE(clblast_split_k_matches_float64) {
+  for (const size_t kc : {size_t{40}, size_t{200}})
+    for (const auto& [ta, tb] : {std::pair{true, false}, {false, false}, {false, true}, {true, true}}) {
+      const GemmConfig cfg{"clblast", {{"KC", kc}}};
+      BOOST_TEST_CONTEXT(cfg.str() << " ta=" << ta << " tb=" << tb) {
+        BOOST_TEST(run_and_check(cfg, ta, tb, 37, 53, 131, 1, 1.0f, 0.0f) <= 1.0);
+        BOOST_TEST(run_and_check(cfg, ta, tb, 29, 19, 120, 2, 0.5f, 0.75f) <= 1.0);
+        BOOST_TEST(run_and_check(cfg, ta, tb, 3, 5, 1, 1, 1.0f, 1.0f) <= 1.0);
+      }
+    }
+  Runtime& rt = test::runtime();
+  GemmArgs tn{true, false, 64, 48, 4096};
+  BOOST_TEST(gemm_temp_bytes_with(rt, GemmConfig{"clblast", {{"KC", 1024}}}, tn) ==
+             4 * 64 * 48 * sizeof(float));  // the partial sums of 4 chunks
+  bool proposed = false;
+  for (const auto& c : gemm_candidates(rt, GemmShapeClass{"tn", 256, 256, 65536}, true))
+    proposed |= c.config.provider == "clblast" && c.config.params.count("KC");
+  BOOST_TEST(proposed);
+}
+
+// A workspace holding NaN (memory a previous op left) does not leak into a split product.
+BOOST_AUTO_TEST_CASE(clblast_split_k_ignores_stale_workspace) {
+  Runtime& rt = test::runtime();
+  const size_t m = 16, n = 24, k = 300;
+  const auto a = test::random_floats(k * m, -1, 1, 41), b = test::random_floats(k * n, -1, 1, 42);
+  const std::vector<float> c0(m * n, 0.0f);
+  Buffer da = rt.upload_floats(a), db = rt.upload_floats(b), dc = rt.upload_floats(c0);
+  GemmArgs g{true, false, m, n, k, 1.0f, da.get(), m, k * m, db.get(), n, k * n, 0.0f,
+             dc.get(), n, m * n, 1};
+  const GemmConfig cfg{"clblast", {{"KC", 64}}};
+  const size_t bytes = gemm_temp_bytes_with(rt, cfg, g);
+  Buffer temp = rt.upload_floats(std::vector<float>(bytes / sizeof(float), std::numeric_limits<float>::quiet_NaN()));
+  gemm_with(rt, cfg, g, temp.get());
+  BOOST_TEST(gemm_error_ratio(g, a, b, c0, rt.download_floats(dc.get(), m * n)) <= 1.0);
 }
 
 // The tuned mode runs the cache's winner for a shape class (and shapes within a factor of 4

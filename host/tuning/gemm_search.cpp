@@ -146,6 +146,11 @@ std::vector<GemmCandidate> gemm_candidates(Runtime& rt, const GemmShapeClass& sh
         c.push_back({GemmConfig{"clblast", grid[i]}, {}});
         ++taken;
       }
+  // The weight gradient through the table's CLBlast in chunks of k (split-K), for GPUs whose
+  // work-groups the unsplit product leaves idle.
+  if (shape.kind == "tn")
+    for (size_t kc : {size_t{2048}, size_t{8192}})
+      if (kc < shape.k) c.push_back({GemmConfig{"clblast", {{"KC", kc}}}, {}});
   c.push_back({GemmConfig{"kernels", {}}, {}});
   if (host_blas) c.push_back({GemmConfig{"host", {}}, {}});
   // Blocked kernels: RM x 8 VN accumulators fit 16 AVX2 / 32 AVX-512 registers up to 12.

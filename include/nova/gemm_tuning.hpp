@@ -35,7 +35,8 @@ struct GemmArgs {
 // ---- one concrete way to run a GEMM -------------------------------------------------------
 struct GemmConfig {
   std::string provider = "clblast";  // "clblast", "kernels", "blocked", "host"
-  // clblast: Xgemm parameters (MWG, NWG, ...; empty = the device's table entry);
+  // clblast: Xgemm parameters (MWG, NWG, ...; empty = the device's table entry) and nova's
+  // KC (split the reduction over k in chunks of KC; absent or 0: no split);
   // blocked: RM, VN, KC (KC = 0: no split), TA.
   std::map<std::string, size_t> params;
   std::string str() const;  // "blocked RM=6 VN=2 KC=1024", "clblast" (the table)
