@@ -1,9 +1,12 @@
 # bundle/env.sh (copied there by scripts/bundle-gpu.sh). Source it from bash on the machine
 # that builds and runs nova from the bundle:  . bundle/env.sh
 #
-# Sets NOVA_BUNDLE (this folder) and NOVA_CMAKE_ARGS, the CMake arguments of a core build
-# that takes OpenCL, CLBlast and Boost.Test from the bundle alone (RPATH into the bundle, so
-# the binaries need no LD_LIBRARY_PATH):  cmake -S . -B build-gpu $NOVA_CMAKE_ARGS
+# Sets NOVA_BUNDLE (this folder) and NOVA_CMAKE_ARGS, the CMake arguments of a build that
+# takes OpenCL, CLBlast, Boost, OpenCV core/imgproc, stb and zlib from the bundle alone, with
+# images through stb_image (NOVA_OPENCV_CODECS=OFF). The executables carry an old-style RPATH
+# into the bundle (--disable-new-dtags: unlike RUNPATH it also serves the libraries' own
+# dependencies, such as OpenCV core's libtbb), so nothing needs LD_LIBRARY_PATH:
+#   cmake -S . -B build-gpu $NOVA_CMAKE_ARGS
 #
 # NVIDIA ICD: nova links the bundle's ocl-icd loader, which finds drivers through *.icd files
 # in /etc/OpenCL/vendors. When none of them names NVIDIA's driver but the driver's
@@ -15,7 +18,9 @@
 NOVA_BUNDLE=$(cd "$(dirname "${BASH_SOURCE[0]:-$0}")" && pwd)
 export NOVA_BUNDLE
 _nova_lib="$NOVA_BUNDLE/usr/lib/x86_64-linux-gnu"
-NOVA_CMAKE_ARGS="-DNOVA_BUILD_IO=OFF -DNOVA_BUILD_TOOLS=OFF -DNOVA_BENCH_HOST_BLAS=OFF"
+NOVA_CMAKE_ARGS="-DNOVA_OPENCV_CODECS=OFF -DNOVA_BENCH_HOST_BLAS=OFF"
+NOVA_CMAKE_ARGS="$NOVA_CMAKE_ARGS -DOpenCV_DIR=$_nova_lib/cmake/opencv4 -DZLIB_ROOT=$NOVA_BUNDLE/usr"
+NOVA_CMAKE_ARGS="$NOVA_CMAKE_ARGS -DCMAKE_EXE_LINKER_FLAGS=-Wl,--disable-new-dtags"
 NOVA_CMAKE_ARGS="$NOVA_CMAKE_ARGS -DCMAKE_PREFIX_PATH=$NOVA_BUNDLE/usr"
 NOVA_CMAKE_ARGS="$NOVA_CMAKE_ARGS -DOpenCL_INCLUDE_DIR=$NOVA_BUNDLE/usr/include"
 NOVA_CMAKE_ARGS="$NOVA_CMAKE_ARGS -DOpenCL_LIBRARY=$_nova_lib/libOpenCL.so"

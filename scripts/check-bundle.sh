@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Proves that a build from bundle/ needs nothing else from Debian: in a private mount
 # namespace (unshare -m, root), empty directories and files are bound over the system's
-# OpenCL, CLBlast, Boost, nlohmann-json, OpenCV and OpenBLAS headers, libraries and
-# CMake/pkg-config packages; scripts/gpu-build.sh then builds nova's core, nova-bench,
-# embed_core and the core suites, ldd must resolve libOpenCL and libclblast into the bundle,
+# OpenCL, CLBlast, Boost, nlohmann-json, OpenCV (with TBB, LAPACK, BLAS and GLX), stb, zlib's
+# headers (libz itself stays: the system needs it) and OpenBLAS headers, libraries and CMake/pkg-config packages;
+# scripts/gpu-build.sh then builds the whole of nova, ldd must resolve libOpenCL, libclblast
+# and libopencv into the bundle,
 # and the binaries run on PoCL (not bundled: its ICD entry and library stay visible for the
 # run). It also checks env.sh's NVIDIA ICD set-up against a stand-in driver library.
 # Usage (as root, after scripts/bundle-gpu.sh):
@@ -56,7 +57,8 @@ hide /usr/include/CL /usr/include/boost /usr/include/opencv4 /usr/include/clblas
      /usr/include/x86_64-linux-gnu/cblas*.h /usr/include/x86_64-linux-gnu/openblas* \
      $L/cmake $L/pkgconfig /usr/share/pkgconfig \
      $L/libOpenCL.so* $L/libclblast.so* $L/libclblast.a $L/libboost_* $L/libopencv_* \
-     $L/libopenblas* $L/openblas*
+     $L/libopenblas* $L/openblas* $L/libtbb* $L/liblapack* $L/libblas* $L/lapack $L/blas \
+     $L/libGLX* /usr/include/stb /usr/include/zlib.h /usr/include/zconf.h
 echo "check-bundle: $hidden system paths hidden, e.g.:"
 for p in /usr/include/CL/cl.h /usr/include/clblast.h /usr/include/boost/version.hpp $L/libOpenCL.so.1 $L/libclblast.so.1; do
   if [ -s "$p" ]; then echo "check-bundle: $p is still visible" >&2; exit 1; fi
@@ -69,17 +71,19 @@ NOVA_JOBS=${NOVA_JOBS:-1} bash scripts/gpu-build.sh "$BUILD"
 
 # ---- the binaries load OpenCL and CLBlast from the bundle ----------------------------------
 status=0
-for bin in "$BUILD/nova-bench" "$BUILD/examples/embed_core" "$BUILD/tests/nova_tests"; do
+for bin in "$BUILD/nova" "$BUILD/nova-bench" "$BUILD/examples/embed_core" "$BUILD/tests/nova_tests"; do
   loaded=$(ldd "$bin")
   echo "ldd $bin:"
-  grep -E "libOpenCL|libclblast|libboost|opencv|blas" <<<"$loaded" | sed 's/^/ /'
-  for lib in libOpenCL.so.1 libclblast.so.1; do
+  grep -E "libOpenCL|libclblast|libboost|opencv|blas|lapack|tbb|GLX" <<<"$loaded" | sed 's/^/ /'
+  libs="libOpenCL.so.1 libclblast.so.1"
+  [ "$bin" = "$BUILD/examples/embed_core" ] || libs="$libs libopencv_core.so.406 libtbb.so.12 liblapack.so.3"
+  for lib in $libs; do
     if ! grep -q "$lib => $BUNDLE/" <<<"$loaded"; then
       echo "check-bundle: $bin does not load $lib from $BUNDLE" >&2
       status=1
     fi
   done
-  if grep -qE "not found|libopencv|libopenblas" <<<"$loaded"; then
+  if grep -qE "not found|libopenblas|lib(opencv_imgcodecs|opencv_videoio|gdal|avcodec)" <<<"$loaded"; then
     echo "check-bundle: $bin needs something outside the bundle" >&2
     status=1
   fi
@@ -92,7 +96,8 @@ export POCL_CACHE_DIR=$(pwd)/$BUILD/pocl-cache
 "$BUILD/nova-bench" mlp --batches 4099 --depth 6 --width 64 --repeats 1 | sed -n '1,8p'
 "$BUILD/nova-bench" render --rays 4099 --samples 16 --repeats 1 | sed -n '1,10p'
 if [ "$QUICK" -eq 1 ]; then
-  ctest --test-dir "$BUILD" -j2 --output-on-failure -R '^(warm_kernel_cache|op_table|kernel_portability|core_link_is_lean)$'
+  ctest --test-dir "$BUILD" -j2 --output-on-failure \
+    -R '^(warm_kernel_cache|op_table|kernel_portability|core_link_is_lean|image_codec|scene_io|visualize|cli_run)$'
 else
   ctest --test-dir "$BUILD" -j2 --output-on-failure
 fi

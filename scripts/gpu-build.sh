@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Builds nova's core, nova-bench, examples/embed_core and the core test suites from bundle/
-# (scripts/bundle-gpu.sh) and nothing else: the GPU machines have a compiler, CMake and the
-# driver but no Debian packages. No OpenCV there, so nova_io, the CLI and the suites that
-# read scenes or images are left out (NOVA_BUILD_IO=OFF).
+# Builds nova (core, nova_io, the CLI, nova-bench, examples/embed_core and the test suites)
+# from bundle/ (scripts/bundle-gpu.sh) and nothing else: the GPU machines have a compiler,
+# CMake and the driver but no Debian packages. The bundle has OpenCV's core and imgproc only,
+# so images go through stb_image and no videos are written (NOVA_OPENCV_CODECS=OFF).
 # Usage: bash scripts/gpu-build.sh [BUILD_DIR]   (default build-gpu; NOVA_JOBS, default nproc)
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,13 +1,17 @@
 #!/usr/bin/env bash
 # One pass over a GPU machine that has the driver, a compiler and CMake but no packages: builds
-# nova from bundle/ (scripts/bundle-gpu.sh), runs the test suites of that build on the GPU, then
-# the benchmarks that need no scene, and writes what it saw to OUT_DIR (at most 8 files):
+# nova from bundle/ (scripts/bundle-gpu.sh), runs the test suites on the GPU, the benchmarks,
+# and the main job, and writes what it saw to OUT_DIR:
 #   machine.txt   GPU, driver, compiler, CMake, torch, and the device embed_core runs on
 #   build.log     the build          ctest.log   the suites, one line each, failures in full
-#   mlp.txt       nova-bench mlp (beside PyTorch on the same GPU where python3 has CUDA torch)
-#   render.txt    nova-bench render  ops.txt     nova-bench ops (every op at its largest shape)
-# Each stage has a time limit, so one that hangs leaves the others their time.
-# Usage: bash scripts/gpu-check.sh OUT_DIR [BUILD_DIR]      (BUILD_DIR: build-gpu)
+#   mlp.txt       nova-bench mlp, GEMMs as chosen (tuned: split-K weight gradient) and CLBlast
+#                 unsplit, beside PyTorch on the same GPU where python3 has CUDA torch
+#   step.txt      nova-bench step: quick and reference, 1 and 2 objects, default synthetic scene
+#   main.txt      the main job (nova synth, train --preset quick, eval), with its times
+#   eval/         its camera-0 and composition pictures
+#   render.txt    nova-bench render  ops.txt     nova-bench ops (every op at its table shape)
+# Each stage has a time limit, so one that hangs leaves the others their time; NOVA_GPU_SKIP
+# names stages to leave out (e.g. "render ops").
 set -uo pipefail
 cd "$(dirname "$0")/.."
 OUT_DIR=${1:?usage: bash scripts/gpu-check.sh OUT_DIR [BUILD_DIR]}
@@ -38,27 +42,66 @@ echo "--- embed_core" >>"$OUT_DIR/machine.txt"
 timeout 60 "$BUILD/examples/embed_core" >>"$OUT_DIR/machine.txt" 2>&1
 cat "$OUT_DIR/machine.txt"
 
-stage "test suites"
-timeout "${NOVA_GPU_TEST_S:-300}" ctest --test-dir "$BUILD" -j"${NOVA_GPU_TEST_JOBS:-8}" --timeout 240 \
-  --output-on-failure >"$OUT_DIR/ctest.log" 2>&1
-echo "ctest exit $?" >>"$OUT_DIR/ctest.log"
-grep -E "tests passed|tests failed|\*\*\*Failed|Timeout|ctest exit" "$OUT_DIR/ctest.log" | tail -20
+skip() { case " ${NOVA_GPU_SKIP:-} " in *" $1 "*) echo "gpu-check: $1 skipped"; return 0 ;; esac; return 1; }
 
-stage "nova-bench mlp"
-torch=off
-python3 -c 'import torch, sys; sys.exit(0 if torch.cuda.is_available() else 1)' 2>/dev/null && torch=$(command -v python3)
-timeout "${NOVA_GPU_MLP_S:-150}" "$BUILD/nova-bench" mlp --batches 16384,65536,262144 --repeats 5 \
-  --torch "$torch" --torch-device cuda >"$OUT_DIR/mlp.txt" 2>&1
-echo "exit $?" >>"$OUT_DIR/mlp.txt"
-sed -n '1,/^CSV$/p' "$OUT_DIR/mlp.txt" | head -60
+if ! skip ctest; then
+  stage "test suites"
+  timeout "${NOVA_GPU_TEST_S:-300}" ctest --test-dir "$BUILD" -j"${NOVA_GPU_TEST_JOBS:-8}" --timeout 240 \
+    --output-on-failure >"$OUT_DIR/ctest.log" 2>&1
+  echo "ctest exit $?" >>"$OUT_DIR/ctest.log"
+  grep -E "tests passed|tests failed|\*\*\*Failed|Timeout|ctest exit" "$OUT_DIR/ctest.log" | tail -20
+fi
 
-stage "nova-bench render"
-timeout "${NOVA_GPU_RENDER_S:-90}" "$BUILD/nova-bench" render --repeats 5 >"$OUT_DIR/render.txt" 2>&1
-echo "exit $?" >>"$OUT_DIR/render.txt"
-head -30 "$OUT_DIR/render.txt"
+if ! skip mlp; then
+  stage "nova-bench mlp"
+  torch=off
+  python3 -c 'import torch, sys; sys.exit(0 if torch.cuda.is_available() else 1)' 2>/dev/null && torch=$(command -v python3)
+  timeout "${NOVA_GPU_MLP_S:-150}" "$BUILD/nova-bench" mlp --batches "${NOVA_GPU_MLP_BATCHES:-16384,65536,262144}" --repeats 5 \
+    --gemm tuned,clblast --torch "$torch" --torch-device cuda >"$OUT_DIR/mlp.txt" 2>&1
+  echo "exit $?" >>"$OUT_DIR/mlp.txt"
+  sed -n '1,/^CSV$/p' "$OUT_DIR/mlp.txt" | head -80
+fi
 
-stage "nova-bench ops"
-timeout "${NOVA_GPU_OPS_S:-90}" "$BUILD/nova-bench" ops --reps 20 >"$OUT_DIR/ops.txt" 2>&1
-echo "exit $?" >>"$OUT_DIR/ops.txt"
-tail -8 "$OUT_DIR/ops.txt"
+work=$(mktemp -d)
+if ! skip step || ! skip main; then
+  "$BUILD/nova" synth --out "$work/scene" >/dev/null
+fi
+
+if ! skip step; then
+  stage "nova-bench step"
+  timeout "${NOVA_GPU_STEP_S:-150}" "$BUILD/nova-bench" step --scene "$work/scene" --presets quick,reference \
+    --objects 1,2 --steps 10 --warmup 3 --torch off >"$OUT_DIR/step.txt" 2>&1
+  echo "exit $?" >>"$OUT_DIR/step.txt"
+  grep -vE "^ +[a-z_]+ +[0-9]" "$OUT_DIR/step.txt" | head -40
+fi
+
+if ! skip main; then
+  stage "main job"
+  {
+    t0=$(date +%s%N)
+    timeout "${NOVA_GPU_MAIN_S:-240}" "$BUILD/nova" train --scene "$work/scene" --out "$work/run" --preset quick
+    echo "train exit $? after $(( ($(date +%s%N) - t0) / 1000000 )) ms"
+    t1=$(date +%s%N)
+    timeout 120 "$BUILD/nova" eval --run "$work/run"
+    echo "eval exit $? after $(( ($(date +%s%N) - t1) / 1000000 )) ms"
+  } >"$OUT_DIR/main.txt" 2>&1
+  grep -vE "^step|^ *[0-9]+/" "$OUT_DIR/main.txt" | tail -25
+  mkdir -p "$OUT_DIR/eval"
+  cp "$work"/run/eval/*.png "$OUT_DIR/eval/" 2>/dev/null
+fi
+rm -rf "$work"
+
+if ! skip render; then
+  stage "nova-bench render"
+  timeout "${NOVA_GPU_RENDER_S:-90}" "$BUILD/nova-bench" render --repeats 5 >"$OUT_DIR/render.txt" 2>&1
+  echo "exit $?" >>"$OUT_DIR/render.txt"
+  head -30 "$OUT_DIR/render.txt"
+fi
+
+if ! skip ops; then
+  stage "nova-bench ops"
+  timeout "${NOVA_GPU_OPS_S:-90}" "$BUILD/nova-bench" ops --reps 20 >"$OUT_DIR/ops.txt" 2>&1
+  echo "exit $?" >>"$OUT_DIR/ops.txt"
+  tail -8 "$OUT_DIR/ops.txt"
+fi
 stage "done"

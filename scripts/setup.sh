@@ -10,6 +10,7 @@ PACKAGES=(
   libclblast-dev
   nlohmann-json3-dev  # JSON (header-only): scene readers, metrics.jsonl, eval.json, bench outputs
   libopencv-dev
+  libstb-dev        # stb_image: nova_io's image codec where OpenCV's imgcodecs is missing (tested against it)
   zlib1g-dev        # .npz scenes (deflated ZIP members)
   libboost-program-options-dev libboost-test-dev
   libopenblas-dev   # host BLAS: the "host" GEMM provider of CPU devices (loaded at run time) and the benches

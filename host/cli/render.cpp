@@ -106,6 +106,9 @@ int render_rank(const Args& args, MpiJob* mpi) {
                       " object NeRF(s))");
     }
   }
+  if (vm["video"].as<bool>() && !video_supported())
+    throw Error("--video: this nova was built without OpenCV's videoio, so it writes no videos "
+                "(install libopencv-videoio-dev and rebuild; the frames are PNGs either way)");
   const int cam = vm["camera"].as<int>();
   if (cam < 0 || cam >= static_cast<int>(all_frames.size()))
     throw Error("--camera " + std::to_string(cam) + ": the scene has frames " + frame_range);

@@ -1,14 +1,15 @@
-// 8-bit image I/O over OpenCV. Files are read into memory first so that "missing",
-// "unreadable", "not a PNG" and "truncated" get distinct messages; cv::imdecode alone reports
-// all of them as an empty image (and libpng may decode a truncated file partially).
+// 8-bit image I/O over OpenCV (the codec: image_codec.hpp). Files are read into memory first
+// so that "missing", "unreadable", "not a PNG" and "truncated" get distinct messages; a
+// decoder alone reports all of them as an empty image (and libpng may decode a truncated file
+// partially).
 #include "nova/io/image_io.hpp"
 
 #include <cstring>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "image_codec.hpp"
 #include "nova/error.hpp"
 
 namespace nova {
@@ -44,7 +45,7 @@ cv::Mat decode(const std::string& path) {
     if (bytes.size() < 8 + 12 || std::memcmp(bytes.data() + bytes.size() - 12, iend, 12) != 0)
       throw Error(path + ": truncated PNG (no IEND chunk at the end)");
   }
-  cv::Mat m = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  cv::Mat m = detail::decode_image(bytes, detail::image_codec());
   if (m.empty()) throw Error(path + ": cannot decode image (corrupt or unsupported format)");
   if (m.depth() == CV_16U) m.convertTo(m, CV_8U, 1.0 / 257.0);
   if (m.depth() != CV_8U) throw Error(path + ": unsupported pixel depth (need 8 or 16 bits)");
@@ -120,8 +121,7 @@ void write_png(const std::string& path, const Image8& image) {
   cv::Mat m = to_mat(image);
   if (image.channels == 3) cv::cvtColor(m, m, cv::COLOR_RGB2BGR);
   std::vector<unsigned char> bytes;
-  const std::vector<int> params = {cv::IMWRITE_PNG_COMPRESSION, 6};
-  if (!cv::imencode(".png", m, bytes, params)) throw Error(path + ": PNG encoding failed");
+  if (!detail::encode_png(m, bytes, detail::image_codec())) throw Error(path + ": PNG encoding failed");
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) throw Error(path + ": cannot create");
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));

@@ -8,8 +8,10 @@
 #include <cstring>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 #include <string>
+#if NOVA_HAVE_VIDEOIO
+#include <opencv2/videoio.hpp>
+#endif
 
 #include "nova/error.hpp"
 #include "nova/io/image_metrics.hpp"
@@ -121,7 +123,12 @@ Image8 depth_to_color(const std::vector<float>& depth, int width, int height, fl
   return out;
 }
 
+bool video_supported() { return NOVA_HAVE_VIDEOIO != 0; }
+
 void write_video(const std::vector<Image8>& frames, const std::string& path, double fps) {
+  if (!video_supported())
+    throw Error(path + ": cannot write video: this nova was built without OpenCV's videoio "
+                "(install libopencv-videoio-dev and rebuild)");
   if (frames.empty()) throw Error(path + ": cannot write a video with no frames");
   if (!(std::isfinite(fps) && fps > 0))
     throw Error(path + ": video frame rate " + num(fps) + " must be positive");
@@ -149,6 +156,7 @@ void write_video(const std::vector<Image8>& frames, const std::string& path, dou
   const fs::path tmp = dir / (target.stem().string() + ".tmp" + target.extension().string());
   TempFile guard(tmp);
 
+#if NOVA_HAVE_VIDEOIO
   const cv::Size size(first.width, first.height);
   cv::VideoWriter writer;
   const char* codecs[] = {"mp4v", "avc1"};
@@ -181,6 +189,7 @@ void write_video(const std::vector<Image8>& frames, const std::string& path, dou
   fs::rename(tmp, target, ec);
   if (ec) throw Error(path + ": cannot rename " + tmp.string() + " into place: " + ec.message());
   guard.release();
+#endif
 }
 
 }  // namespace nova

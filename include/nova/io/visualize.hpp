@@ -44,6 +44,8 @@ Image8 depth_to_color(const std::vector<float>& depth, int width, int height, fl
 // says those are still there), the folder does not exist, `path` has no extension, the
 // frames are empty or differ in size, or fps is not positive.
 void write_video(const std::vector<Image8>& frames, const std::string& path, double fps);
+// Whether this build writes videos (OpenCV's videoio was found); without it write_video throws.
+bool video_supported();
 
 // ---- charts and picture sheets (RGB, white background, Tableau 10 colours) ----------------
 
