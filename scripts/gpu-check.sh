@@ -82,7 +82,7 @@ if ! skip main; then
     timeout "${NOVA_GPU_MAIN_S:-240}" "$BUILD/nova" train --scene "$work/scene" --out "$work/run" --preset quick
     echo "train exit $? after $(( ($(date +%s%N) - t0) / 1000000 )) ms"
     t1=$(date +%s%N)
-    timeout 120 "$BUILD/nova" eval --run "$work/run"
+    timeout "${NOVA_GPU_EVAL_S:-120}" "$BUILD/nova" eval --run "$work/run"
     echo "eval exit $? after $(( ($(date +%s%N) - t1) / 1000000 )) ms"
   } >"$OUT_DIR/main.txt" 2>&1
   grep -vE "^step|^ *[0-9]+/" "$OUT_DIR/main.txt" | tail -25
