@@ -1,5 +1,6 @@
 // Device discovery and choice, program building and its error reporting.
 #include <boost/test/unit_test.hpp>
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 
@@ -39,6 +40,23 @@ BOOST_AUTO_TEST_CASE(lists_devices_and_selects_by_index_and_name) {
     BOOST_TEST(d.global_mem_bytes > 0u);
     BOOST_TEST(select_device(d.id()).device == d.device);
     BOOST_TEST(select_device(d.name.substr(0, 6)).name.find(d.name.substr(0, 6)) == 0u);
+  }
+  // By type: the first device of that type, in list order; a type the machine lacks is an
+  // error naming it.
+  for (const char* type : {"cpu", "GPU"}) {
+    const cl_device_type want = std::string(type) == "cpu" ? CL_DEVICE_TYPE_CPU : CL_DEVICE_TYPE_GPU;
+    const auto first = std::find_if(all.begin(), all.end(), [&](const DeviceInfo& d) { return (d.type & want) != 0; });
+    if (first == all.end()) {
+      try {
+        select_device(type);
+        BOOST_FAIL("select_device(" << type << ") chose a device on a machine without one");
+      } catch (const Error& e) {
+        BOOST_TEST(std::string(e.what()).find("no " + std::string(type == std::string("cpu") ? "cpu" : "gpu")) != std::string::npos, e.what());
+      }
+    } else {
+      const DeviceInfo d = select_device(type);
+      BOOST_TEST((d.platform == first->platform && d.device == first->device), type);
+    }
   }
 }
 

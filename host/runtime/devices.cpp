@@ -142,7 +142,15 @@ DeviceInfo select_device(const std::string& selector_arg) {
     return all.front();
   }
 
-  // "P:D" selects by index; anything else is a name substring.
+  // "cpu" / "gpu" select by type (the first of that type); "P:D" by index; anything else is a
+  // name substring.
+  if (const auto type = lower(selector); type == "cpu" || type == "gpu") {
+    const cl_device_type want = type == "cpu" ? CL_DEVICE_TYPE_CPU : CL_DEVICE_TYPE_GPU;
+    for (const auto& d : all)
+      if (d.type & want) return d;
+    throw Error(source + " '" + selector + "': this machine has no " + type + " OpenCL device; found: " +
+                found_summary(all) + " (see `nova devices`)");
+  }
   const auto colon = selector.find(':');
   if (colon != std::string::npos &&
       std::all_of(selector.begin(), selector.end(),

@@ -49,8 +49,8 @@ struct DeviceInfo {
 // Every device of every platform. An empty list means no OpenCL platform is installed.
 std::vector<DeviceInfo> list_devices();
 
-// Chooses a device: `selector` ("P:D" or a case-insensitive substring of the device or
-// platform name); when empty, the NOVA_DEVICE variable; when that is empty too, the first
+// Chooses a device: `selector` ("cpu" or "gpu": the first device of that type; "P:D"; or a
+// case-insensitive substring of the device or platform name); when empty, the NOVA_DEVICE variable; when that is empty too, the first
 // GPU, else the first CPU. Throws Error (exit code 2) naming what was found and what to
 // install when nothing matches.
 DeviceInfo select_device(const std::string& selector = "");
