@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "nova/io/evaluation.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/io/llff_poses.hpp"
 #include "nova/io/npy.hpp"
@@ -200,6 +201,34 @@ BOOST_AUTO_TEST_CASE(held_out_frames_keep_the_time_axis) {
   BOOST_TEST(held.gt_views[1].kind == "heldout");
   BOOST_TEST(held.gt_views[1].time_index == 4);
   BOOST_TEST(held.gt_views[1].time == frame_time(4, 12));
+  // Camera indices count the folder's frames, held-out ones in their places; a ground-truth
+  // camera that never was a folder frame (a synthetic scene's held-out cameras, kind
+  // "heldout" too) takes none. Cameras are told apart by their focal length here.
+  {
+    Scene s;
+    s.name = "indices";
+    for (int i = 0; i < 6; ++i) {
+      Frame f;
+      f.time = frame_time(i, 6);
+      f.camera.fx = 100.0 + i;
+      s.frames.push_back(f);
+    }
+    for (int i = 0; i < 6; ++i) {  // two extra cameras per time, as `nova synth` writes them
+      GroundTruthView v;
+      v.kind = "heldout";
+      v.name = "heldout1/" + std::to_string(i);
+      v.time = frame_time(i, 6);
+      v.camera.fx = 500.0 + i;
+      s.gt_views.push_back(v);
+    }
+    hold_out_frames(s, 4);  // folder frames 0 and 4
+    const std::vector<FolderFrame> frames = folder_frames(s);
+    BOOST_REQUIRE(frames.size() == 6u);
+    for (int i = 0; i < 6; ++i) {
+      BOOST_TEST(frames[i].camera.fx == 100.0 + i, "folder frame " << i);
+      BOOST_TEST(frames[i].time == frame_time(i, 6));
+    }
+  }
   held.frames.resize(1);
   BOOST_CHECK_THROW(hold_out_frames(held, 2), Error);
 }

@@ -26,6 +26,7 @@ void hold_out_frames(Scene& scene, int every) {
     v.name = name;
     v.kind = "heldout";
     v.time_index = static_cast<int>(i);
+    v.folder_index = static_cast<int>(i);
     v.time = f.time;
     v.camera = f.camera;
     v.rgb = std::move(f.rgb);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include "nova/io/image_metrics.hpp"
 #include "nova/io/scene_io.hpp"
@@ -21,12 +22,27 @@ Scene load_training_scene(const std::string& dir, const TrainConfig& config, boo
 }
 
 std::vector<FolderFrame> folder_frames(const Scene& scene) {
+  // The held-out frames at their folder indices, the training frames in order in the others.
+  // Ground-truth cameras that were never folder frames (folder_index -1) take no index.
+  size_t held = 0;
+  for (const GroundTruthView& v : scene.gt_views) held += v.folder_index >= 0;
+  std::vector<std::optional<FolderFrame>> slots(scene.frames.size() + held);
+  for (const GroundTruthView& v : scene.gt_views) {
+    if (v.folder_index < 0) continue;
+    const size_t i = static_cast<size_t>(v.folder_index);
+    if (i >= slots.size() || slots[i])
+      throw Error("scene '" + scene.name + "': held-out view " + v.name + " claims folder frame " +
+                      std::to_string(i) + " of " + std::to_string(slots.size()),
+                  kExitInternal);
+    slots[i] = FolderFrame{v.camera, v.time};
+  }
+  size_t next = 0;
+  for (const Frame& f : scene.frames) {
+    while (slots[next]) ++next;
+    slots[next++] = FolderFrame{f.camera, f.time};
+  }
   std::vector<FolderFrame> out;
-  for (const Frame& f : scene.frames) out.push_back({f.camera, f.time});
-  for (const GroundTruthView& v : scene.gt_views)
-    if (v.kind == "heldout") out.push_back({v.camera, v.time});
-  // Frame i has time 2i/N - 1: time order is the folder's order.
-  std::stable_sort(out.begin(), out.end(), [](const FolderFrame& a, const FolderFrame& b) { return a.time < b.time; });
+  for (const auto& s : slots) out.push_back(*s);
   return out;
 }
 

@@ -60,6 +60,10 @@ struct GroundTruthView {
   double time = 0;
   Camera camera;
   Image8 rgb;
+  // The view's index among the scene folder's own frames when it is one of them (a frame a
+  // --holdout run kept out of training), else -1 (a ground-truth camera beside the frames,
+  // such as a synthetic scene's held-out cameras).
+  int folder_index = -1;
 };
 
 // A composition target: the background plus object instances placed as the spec says.

@@ -22,7 +22,8 @@ Scene load_training_scene(const std::string& dir, const TrainConfig& config, boo
 
 // A frame of the scene folder: its camera and time. Camera indices (`nova render --camera`, a
 // composition target's camera=) count every frame of the folder in its order, the held-out
-// frames of a --holdout run (kept as "heldout" ground-truth views) included.
+// frames of a --holdout run (kept as "heldout" ground-truth views with their folder_index)
+// included, and no other ground-truth camera (a synthetic scene's held-out cameras).
 struct FolderFrame {
   Camera camera;
   double time;
