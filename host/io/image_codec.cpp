@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "nova/error.hpp"
 
@@ -27,6 +28,7 @@ namespace {
 
 #if NOVA_HAVE_STB
 cv::Mat stb_decode(const std::vector<unsigned char>& bytes) {
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max())) return {};  // stb counts in int
   const auto* p = bytes.data();
   const int len = static_cast<int>(bytes.size());
   int w = 0, h = 0, n = 0;
@@ -60,7 +62,9 @@ bool stb_encode_png(const cv::Mat& m, std::vector<unsigned char>& out) {
   if (m.channels() == 3) cv::cvtColor(m, rgb, cv::COLOR_BGR2RGB);
   else if (m.channels() == 4) cv::cvtColor(m, rgb, cv::COLOR_BGRA2RGBA);
   else rgb = m.isContinuous() ? m : m.clone();
-  stbi_write_png_compression_level = 6;
+  // stb's level is a global: set once (thread-safe static initialisation), never raced on.
+  static const bool level_set = (stbi_write_png_compression_level = 6, true);
+  (void)level_set;
   out.clear();
   return stbi_write_png_to_func(append_bytes, &out, rgb.cols, rgb.rows, rgb.channels(), rgb.data,
                                 static_cast<int>(rgb.step)) != 0;
