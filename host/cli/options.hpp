@@ -14,8 +14,8 @@ namespace po = boost::program_options;
 inline void add_common_options(po::options_description& desc) {
   desc.add_options()("help,h", "show this help")(
       "device", po::value<std::string>()->default_value(""),
-      "OpenCL device: P:D index or name substring (default: NOVA_DEVICE, else first GPU, "
-      "else first CPU)");
+      "OpenCL device: cpu, gpu (the first of that type), P:D index or name substring (default: "
+      "NOVA_DEVICE, else first GPU, else first CPU)");
 }
 
 // Hard blending (the static blend zeroed where an object blend exceeds 0.5) is what
