@@ -63,7 +63,7 @@ std::unique_ptr<Op> make_column_concat(size_t rows, std::vector<size_t> widths, 
 
 Tensor concat(const std::vector<Tensor>& parts) {
   if (parts.empty()) throw Error("concat of nothing", kExitInternal);
-  const Shape& first = parts[0].shape();
+  const Shape first = parts[0].shape();  // a copy: g.activation below may move the graph's tensors
   std::vector<size_t> widths;
   std::string name = parts[0].info().name;
   for (const Tensor& t : parts) {

@@ -70,8 +70,10 @@ struct Tensor {
   Graph* graph = nullptr;
 
   bool valid() const { return graph && id >= 0; }
+  // A reference into the graph's tensor table: adding a tensor may move it, so do not hold it
+  // across graph building (shape() returns a copy for that reason).
   const TensorInfo& info() const;
-  const Shape& shape() const { return info().shape; }
+  Shape shape() const { return info().shape; }
 };
 
 enum class Pass { Forward, Backward };
