@@ -10,6 +10,8 @@
 #   main.txt      the main job (nova synth, train --preset quick, eval), with its times
 #   eval/         its camera-0 and composition pictures
 #   render.txt    nova-bench render  ops.txt     nova-bench ops (every op at its table shape)
+#   tune.txt, mlp-tuned.txt, gemm-tuning.tsv   with NOVA_GPU_TUNE=1: nova tune --quick on the
+#                 256-wide layer at 65536 rows, and the MLP again with its winners
 # The suites run three at a time (NOVA_GPU_TEST_JOBS): they share the one GPU, and with ten
 # at once five of them did not finish within 300 s on an H200. Each stage has a time limit, so
 # one that hangs leaves the others their time; NOVA_GPU_SKIP names stages to leave out (e.g.
@@ -62,6 +64,20 @@ if ! skip mlp; then
     --gemm tuned,clblast --torch "$torch" --torch-device cuda >"$OUT_DIR/mlp.txt" 2>&1
   echo "exit $?" >>"$OUT_DIR/mlp.txt"
   sed -n '1,/^CSV$/p' "$OUT_DIR/mlp.txt" | head -80
+fi
+
+# Optional (NOVA_GPU_TUNE=1): nova tune on the 256-wide layer's shapes, then the MLP again with
+# the winners (the GEMMs above ran on CLBlast's own parameters).
+if [ "${NOVA_GPU_TUNE:-0}" = 1 ]; then
+  stage "nova tune"
+  export NOVA_TUNING_CACHE="$OUT_DIR/gemm-tuning.tsv"
+  timeout "${NOVA_GPU_TUNE_S:-240}" "$BUILD/nova" tune --quick --widths 256 --inputs 63 \
+    --batch 65536 --budget 60 >"$OUT_DIR/tune.txt" 2>&1
+  echo "exit $?" >>"$OUT_DIR/tune.txt"
+  tail -12 "$OUT_DIR/tune.txt"
+  timeout "${NOVA_GPU_MLP_S:-150}" "$BUILD/nova-bench" mlp --batches 65536 --repeats 5 \
+    --gemm tuned,clblast --torch off >"$OUT_DIR/mlp-tuned.txt" 2>&1
+  sed -n '1,/^CSV$/p' "$OUT_DIR/mlp-tuned.txt" | head -30
 fi
 
 work=$(mktemp -d)
