@@ -200,6 +200,18 @@ BOOST_AUTO_TEST_CASE(host_provider_availability) {
   }
   BOOST_TEST_MESSAGE("no host BLAS provider on " << rt.info().name << " (" << host_blas_library() << ")");
   const GemmProvider chosen = gemm_provider(rt);
+  // Without a host BLAS and a cache entry the table's CLBlast runs, the weight gradient's long
+  // reduction split (at most 32 chunks of at least 2048), other products whole; the forced
+  // clblast mode never splits.
+  set_gemm_provider(rt, GemmProvider::Tuned);
+  const GemmArgs dw{true, false, 48, 40, 65536}, short_k{true, false, 48, 40, 4096}, fwd{false, false, 65536, 40, 48};
+  if (!tuned_gemm_config(rt, dw)) BOOST_TEST(gemm_choice(rt, dw).str() == "clblast KC=2048");
+  const GemmArgs long_dw{true, false, 48, 40, 1u << 20};
+  if (!tuned_gemm_config(rt, long_dw)) BOOST_TEST(gemm_choice(rt, long_dw).str() == "clblast KC=32768");
+  if (!tuned_gemm_config(rt, short_k)) BOOST_TEST(gemm_choice(rt, short_k).str() == "clblast");
+  if (!tuned_gemm_config(rt, fwd)) BOOST_TEST(gemm_choice(rt, fwd).str() == "clblast");
+  set_gemm_provider(rt, GemmProvider::CLBlast);
+  BOOST_TEST(gemm_choice(rt, dw).str() == "clblast");
   set_gemm_provider(rt, GemmProvider::Host);
   Buffer a = rt.upload_floats({1.0f}), b = rt.upload_floats({2.0f}), c = rt.upload_floats({0.0f});
   GemmArgs g{false, false, 1, 1, 1, 1.0f, a.get(), 1, 1, b.get(), 1, 1, 0.0f, c.get(), 1, 1, 1};

@@ -14,8 +14,8 @@
 // winners to the tuning cache (gemm_tuning.hpp), read at start-up by configure_gemm.
 // NOVA_GEMM=tuned|clblast|kernels|host forces a mode: tuned (the default) takes the cache's
 // winner for the shape, else the host BLAS where the device has one, else the table's CLBlast
-// (on a GPU with the weight gradient's long reduction split into chunks: split-K); clblast
-// ignores the cache and never splits. A transposed-A-and-B product goes to CLBlast (or the host BLAS).
+// (with the weight gradient's long reduction split into chunks: split-K); clblast ignores the
+// cache and never splits. A transposed-A-and-B product goes to CLBlast (or the host BLAS).
 //
 // A forward layer may ask for an epilogue, C = act(alpha op(A) op(B) + beta C + bias): nova's
 // own kernels apply it as they store C (after a split reduction's sum, never to a partial), so
