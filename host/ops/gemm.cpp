@@ -198,7 +198,8 @@ GemmConfig choose(Runtime& rt, const GemmArgs& g) {
       if (auto c = tuned_gemm_config(rt, g)) return *c;
       // Without a measured winner a CPU device takes its host BLAS: on a 2-core AVX-512
       // Xeon it ran the MLP layers' products 2-4x faster than the untuned device kernels
-      // (docs/performance.md); a GPU (or a CPU without one) keeps the table's CLBlast.
+      // (docs/performance.md); a GPU (or a CPU without one) keeps the table's CLBlast, with
+      // the weight gradient split along k (untuned_config).
       if (host_gemm_available(rt)) return GemmConfig{"host", {}};
       return untuned_config(g);
     case GemmProvider::CLBlast:  // CLBlast as it comes: no split

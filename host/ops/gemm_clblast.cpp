@@ -4,14 +4,14 @@
 // KC=n splits the reduction over k into chunks of n (see clblast_split_gemm).
 #include "gemm_clblast.hpp"
 
-#include "op_util.hpp"
-
 #include <clblast.h>
 
 #include <map>
 #include <mutex>
 #include <string>
 #include <unordered_map>
+
+#include "op_util.hpp"
 
 namespace nova {
 namespace {
