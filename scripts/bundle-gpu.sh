@@ -129,9 +129,9 @@ CMAKE
 # two modules import from it; calling one aborts with its name.
 stub_dir="$work/stubs"
 mkdir -p "$stub_dir"
+nm -D --undefined-only "$lib/libopencv_core.so.406" "$lib/libopencv_imgproc.so.406" |
+  awk '$1 == "U" {print $2}' | sed 's/@.*//' | sort -u >"$stub_dir/imported.txt"
 for soname in liblapack.so.3 libblas.so.3 libGLX.so.0; do
-  nm -D --undefined-only "$lib/libopencv_core.so.406" "$lib/libopencv_imgproc.so.406" |
-    awk '$1 == "U" {print $2}' | sed 's/@.*//' | sort -u >"$stub_dir/imported.txt"
   # This machine's library gives the symbol list (awk reads to the end: no SIGPIPE under pipefail).
   real=$(ldconfig -p | awk -v n="$soname" '$1 == n && /x86-64/ && !f {print $NF; f = 1}')
   [ -n "$real" ] || { echo "bundle-gpu: $soname not on this machine (its symbol list is needed)" >&2; exit 1; }
