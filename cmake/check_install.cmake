@@ -46,7 +46,9 @@ endforeach()
 
 # The dependencies where the build found them (DEP_PREFIXES, '|'-separated; CLBLAST_DIR,
 # OPENCL_LIBRARY, OPENCL_INCLUDE_DIR): system paths on Debian, a bundle on a GPU machine. They
-# reach the configure below through an initial cache file (-C), which keeps lists whole.
+# reach the configure below through an initial cache file (-C), which keeps lists whole, as do
+# the build's compiler and linker flags (CXX_FLAGS, EXE_LINKER_FLAGS: a sanitised nova needs a
+# sanitised program to link it).
 string(REPLACE "|" ";" dep_prefixes "${DEP_PREFIXES}")
 set(initial "set(CMAKE_PREFIX_PATH \"${prefix};${dep_prefixes}\" CACHE STRING \"\")\n")
 foreach(v CLBlast_DIR:CLBLAST_DIR OpenCL_LIBRARY:OPENCL_LIBRARY OpenCL_INCLUDE_DIR:OPENCL_INCLUDE_DIR)
@@ -55,6 +57,14 @@ foreach(v CLBlast_DIR:CLBLAST_DIR OpenCL_LIBRARY:OPENCL_LIBRARY OpenCL_INCLUDE_D
   list(GET pair 1 given)
   if(NOT "${${given}}" STREQUAL "")
     string(APPEND initial "set(${name} \"${${given}}\" CACHE PATH \"\")\n")
+  endif()
+endforeach()
+foreach(v CMAKE_CXX_FLAGS:CXX_FLAGS CMAKE_EXE_LINKER_FLAGS:EXE_LINKER_FLAGS)
+  string(REPLACE ":" ";" pair ${v})
+  list(GET pair 0 name)
+  list(GET pair 1 given)
+  if(NOT "${${given}}" STREQUAL "")
+    string(APPEND initial "set(${name} \"${${given}}\" CACHE STRING \"\")\n")
   endif()
 endforeach()
 file(WRITE ${WORK_DIR}/dependencies.cmake "${initial}")
@@ -88,6 +98,7 @@ foreach(f IN LISTS flags)
     endif()
   endif()
 endforeach()
-step("compile embed_core with pkg-config" ${CXX} -std=c++20 -O2 ${SOURCE_DIR}/examples/embed_core.cpp ${flags}
-     -o ${WORK_DIR}/embed_core_pc)
+separate_arguments(build_flags UNIX_COMMAND "${CXX_FLAGS} ${EXE_LINKER_FLAGS}")
+step("compile embed_core with pkg-config" ${CXX} -std=c++20 -O2 ${build_flags} ${SOURCE_DIR}/examples/embed_core.cpp
+     ${flags} -o ${WORK_DIR}/embed_core_pc)
 step("run embed_core (pkg-config)" ${WORK_DIR}/embed_core_pc)
