@@ -110,6 +110,31 @@ BOOST_AUTO_TEST_CASE(psnr_of_identical_images_is_opencvs_361) {
   BOOST_TEST(std::abs(psnr(a, a) - 361.20199909921956) <= 1e-9);  // 20 log10(255 / 2^-52)
 }
 
+// The region's PSNR is OpenCV's PSNR of the selected pixels alone, gathered into images of
+// their own (every channel of a selected pixel, none of the others).
+BOOST_AUTO_TEST_CASE(region_psnr_is_psnr_of_the_selected_pixels) {
+  const Image8 a = random_image(29, 17, 3, 31), b = noisy(a, 12.0, 32);
+  Image8 region(29, 17, 1);
+  for (int y = 0; y < 17; ++y)
+    for (int x = 0; x < 29; ++x) region.at(x, y) = uint8_t((x * x + 3 * y) % 7 < 3 ? 200 : 40);
+  region.at(0, 0) = 128, region.at(1, 0) = 127;  // the threshold: 128 is inside, 127 outside
+  for (const bool inside : {true, false}) {
+    std::vector<uint8_t> sa, sb;
+    for (size_t p = 0; p < region.data.size(); ++p)
+      if ((region.data[p] >= 128) == inside)
+        for (size_t k = 0; k < 3; ++k) sa.push_back(a.data[p * 3 + k]), sb.push_back(b.data[p * 3 + k]);
+    Image8 ga(int(sa.size() / 3), 1, 3), gb = ga;
+    ga.data = sa, gb.data = sb;
+    BOOST_TEST(std::abs(region_psnr(a, b, region, inside) - cv_psnr(ga, gb)) <= 1e-9, "inside " << inside);
+  }
+  const Image8 all(29, 17, 1, 255), none(29, 17, 1, 0);
+  BOOST_TEST(region_psnr(a, b, all) == psnr(a, b));
+  BOOST_TEST(std::isnan(region_psnr(a, b, none)));
+  BOOST_TEST(region_psnr(a, b, none, false) == psnr(a, b));
+  expect_error([&] { region_psnr(a, b, Image8(29, 16, 1)); }, {"region_psnr", "29x16x1", "29x17"});
+  expect_error([&] { region_psnr(a, b, a); }, {"region_psnr", "29x17x3", "one-channel"});
+}
+
 BOOST_AUTO_TEST_CASE(ssim_of_identical_images_is_one) {
   const Image8 a = random_image(20, 15, 3, 4);
   BOOST_TEST(std::abs(ssim(a, a) - 1.0) <= 1e-12);

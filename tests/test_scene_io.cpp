@@ -233,6 +233,28 @@ BOOST_AUTO_TEST_CASE(held_out_frames_keep_the_time_axis) {
   BOOST_CHECK_THROW(hold_out_frames(held, 2), Error);
 }
 
+// A held-out frame keeps where its objects are (the largest object mask per pixel), so
+// nova eval can score objects and background apart; a frame without object masks keeps none.
+BOOST_AUTO_TEST_CASE(held_out_frames_keep_their_objects_region) {
+  Scene s;
+  s.name = "regions";
+  for (int i = 0; i < 4; ++i) {
+    Frame f;
+    f.time = frame_time(i, 4);
+    f.masks = {Image8(3, 1, 1, 255), Image8(3, 1, 1, 0), Image8(3, 1, 1, 0)};
+    f.masks[1].data = {200, 10, 0};
+    f.masks[2].data = {0, 130, 127};
+    s.frames.push_back(f);
+  }
+  s.frames[2].masks.resize(1);  // the background's alone
+  hold_out_frames(s, 2);        // frames 0 and 2
+  BOOST_REQUIRE(s.gt_views.size() == 2u);
+  const std::vector<uint8_t> expected{200, 130, 127};
+  BOOST_TEST(s.gt_views[0].objects.data == expected, boost::test_tools::per_element());
+  BOOST_TEST(s.gt_views[0].objects.channels == 1);
+  BOOST_TEST(s.gt_views[1].objects.empty());
+}
+
 BOOST_AUTO_TEST_CASE(bad_missing_frame) {
   TempDir tmp("bad");
   const fs::path dir = copy_tiny_scene(tmp);

@@ -1,6 +1,7 @@
 // `nova eval --run RUN`: renders the scene's ground-truth views with the trained run and
 // reports PSNR (OpenCV's number on 8-bit images) and SSIM per view, their means, and for
 // synthetic scenes the composition targets; writes RUN/eval.json and the renders as PNGs.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,12 +27,23 @@ namespace {
 
 using Score = ViewScore;
 
+bool has_regions(const std::vector<Score>& scores) {
+  return std::any_of(scores.begin(), scores.end(), [](const Score& s) { return std::isfinite(s.object_psnr); });
+}
+
+// With the views' masks known, two more columns: PSNR inside the objects and outside them.
 void print_table(const std::string& title, const std::vector<Score>& scores) {
+  const bool regions = has_regions(scores);
   std::cout << title << "\n  " << std::left << std::setw(28) << "view" << std::right << std::setw(9) << "PSNR"
-            << std::setw(8) << "SSIM" << "\n";
-  for (const Score& s : scores)
+            << std::setw(8) << "SSIM";
+  if (regions) std::cout << std::setw(9) << "objects" << std::setw(12) << "background";
+  std::cout << "\n";
+  for (const Score& s : scores) {
     std::cout << "  " << std::left << std::setw(28) << s.name << std::right << std::fixed << std::setprecision(2)
-              << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim << "\n";
+              << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim;
+    if (regions) std::cout << std::setprecision(2) << std::setw(9) << s.object_psnr << std::setw(12) << s.background_psnr;
+    std::cout << "\n";
+  }
 }
 
 // A score as eval.json keeps it: 6 significant digits, which the JSON writer prints as the
@@ -46,7 +58,14 @@ double score_value(double v) {
 nlohmann::ordered_json json_scores(const std::vector<Score>& scores) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
   for (const Score& s : scores)
-    list.push_back({{"name", s.name}, {"psnr", score_value(s.psnr)}, {"ssim", score_value(s.ssim)}});
+  {
+    nlohmann::ordered_json v = {{"name", s.name}, {"psnr", score_value(s.psnr)}, {"ssim", score_value(s.ssim)}};
+    if (std::isfinite(s.object_psnr) || std::isfinite(s.background_psnr)) {
+      v["object_psnr"] = score_value(s.object_psnr);
+      v["background_psnr"] = score_value(s.background_psnr);
+    }
+    list.push_back(v);
+  }
   return list;
 }
 
@@ -125,15 +144,23 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   };
   std::vector<Score> scores = score_views(renderer, scene.num_objects, views, blend.scene_views, write_and_count);
   if (!views.empty() && lead) std::cerr << "\n";
-  if (mpi) {  // every view's PSNR and SSIM, in the order of all views, on every rank
-    std::vector<float> v(2 * all_views.size(), 0.0f);
+  if (mpi) {  // every view's scores, in the order of all views, on every rank (NaN travels as is)
+    constexpr size_t kFields = 4;
+    std::vector<float> v(kFields * all_views.size(), 0.0f);
     for (size_t k = 0; k < mine.size(); ++k) {
-      v[2 * mine[k]] = static_cast<float>(scores[k].psnr);
-      v[2 * mine[k] + 1] = static_cast<float>(scores[k].ssim);
+      const Score& s = scores[k];
+      float* row = &v[kFields * mine[k]];
+      row[0] = static_cast<float>(s.psnr);
+      row[1] = static_cast<float>(s.ssim);
+      row[2] = static_cast<float>(s.object_psnr);
+      row[3] = static_cast<float>(s.background_psnr);
     }
     mpi->reducer().sum(v);
     scores.clear();
-    for (size_t i = 0; i < all_views.size(); ++i) scores.push_back({view_stem(all_views[i].name), v[2 * i], v[2 * i + 1]});
+    for (size_t i = 0; i < all_views.size(); ++i) {
+      const float* row = &v[kFields * i];
+      scores.push_back({view_stem(all_views[i].name), row[0], row[1], row[2], row[3]});
+    }
   }
   if (!lead) return 0;
   const std::vector<Score> compose = score_compose_targets(renderer, scene, blend.composition, write);
@@ -152,6 +179,11 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   json["views"] = json_scores(scores);
   json["mean_psnr"] = score_value(mp);
   json["mean_ssim"] = score_value(ms);
+  const auto [mop, mbp] = mean_region_scores(scores);
+  if (has_regions(scores)) {
+    json["mean_object_psnr"] = score_value(mop);
+    json["mean_background_psnr"] = score_value(mbp);
+  }
   json["compose"] = json_scores(compose);
   json["compose_mean_psnr"] = score_value(cp);
   json["compose_mean_ssim"] = score_value(cs);
@@ -165,6 +197,8 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   std::filesystem::rename(path + ".tmp", path);
   std::cout << std::fixed << std::setprecision(2);
   if (!scores.empty()) std::cout << "mean PSNR " << mp << " dB, SSIM " << std::setprecision(4) << ms << " over " << scores.size() << " views\n";
+  if (has_regions(scores))
+    std::cout << "inside the objects' masks " << std::setprecision(2) << mop << " dB, outside " << mbp << " dB\n";
   if (!compose.empty())
     std::cout << "composition targets: mean PSNR " << std::setprecision(2) << cp << " dB over " << compose.size() << "\n";
   std::cout << "wrote " << path << " and renders in " << pictures << "/ (" << std::setprecision(1) << secs << " s)\n";

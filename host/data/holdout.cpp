@@ -1,6 +1,7 @@
 // The hold-out split: plain data work on a Scene, beside the readers that fill one.
 #include "nova/io/scene_io.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <utility>
 #include <vector>
@@ -30,6 +31,12 @@ void hold_out_frames(Scene& scene, int every) {
     v.time = f.time;
     v.camera = f.camera;
     v.rgb = std::move(f.rgb);
+    if (f.masks.size() > 1) {
+      v.objects = f.masks[1];
+      for (size_t k = 2; k < f.masks.size(); ++k)
+        for (size_t p = 0; p < v.objects.data.size(); ++p)
+          v.objects.data[p] = std::max(v.objects.data[p], f.masks[k].data[p]);
+    }
     scene.gt_views.push_back(std::move(v));
   }
   scene.frames = std::move(kept);

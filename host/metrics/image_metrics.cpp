@@ -75,6 +75,27 @@ double psnr(const Image8& a, const Image8& b) {
   return 20 * std::log10(255.0 / (diff + DBL_EPSILON));
 }
 
+double region_psnr(const Image8& a, const Image8& b, const Image8& region, bool inside) {
+  check_same_shape(a, b, "region_psnr");
+  if (region.width != a.width || region.height != a.height || region.channels != 1 ||
+      region.data.size() != size_t(a.width) * a.height)
+    throw Error("region_psnr: region " + describe(region) + " is not a one-channel " +
+                std::to_string(a.width) + "x" + std::to_string(a.height) + " mask");
+  uint64_t sse = 0, count = 0;
+  const size_t c = size_t(a.channels);
+  for (size_t p = 0; p < region.data.size(); ++p) {
+    if ((region.data[p] >= 128) != inside) continue;
+    for (size_t k = p * c; k < (p + 1) * c; ++k) {
+      const int d = int(a.data[k]) - int(b.data[k]);
+      sse += uint64_t(d * d);
+    }
+    count += c;
+  }
+  if (count == 0) return std::nan("");
+  const double diff = std::sqrt(double(sse) / double(count));
+  return 20 * std::log10(255.0 / (diff + DBL_EPSILON));
+}
+
 double ssim(const Image8& a, const Image8& b) {
   check_same_shape(a, b, "ssim");
   if (a.width < 2 * kRadius + 1 || a.height < 2 * kRadius + 1)

@@ -78,7 +78,12 @@ std::vector<ViewScore> score_views(ViewRenderer& renderer, int num_objects, cons
     const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
     const std::string stem = view_stem(v.name);
     if (sink) sink(i, stem, out);
-    scores.push_back({stem, psnr(out, v.rgb), ssim(out, v.rgb)});
+    ViewScore score{stem, psnr(out, v.rgb), ssim(out, v.rgb)};
+    if (!v.objects.empty()) {
+      score.object_psnr = region_psnr(out, v.rgb, v.objects, true);
+      score.background_psnr = region_psnr(out, v.rgb, v.objects, false);
+    }
+    scores.push_back(score);
   }
   return scores;
 }
@@ -125,6 +130,20 @@ std::pair<double, double> mean_scores(const std::vector<ViewScore>& s) {
     q += x.ssim;
   }
   return {s.empty() ? 0 : p / s.size(), s.empty() ? 0 : q / s.size()};
+}
+
+std::pair<double, double> mean_region_scores(const std::vector<ViewScore>& s) {
+  const auto mean = [&](double ViewScore::*field) {
+    double sum = 0;
+    int n = 0;
+    for (const ViewScore& x : s)
+      if (std::isfinite(x.*field)) {
+        sum += x.*field;
+        ++n;
+      }
+    return n ? sum / n : std::nan("");
+  };
+  return {mean(&ViewScore::object_psnr), mean(&ViewScore::background_psnr)};
 }
 
 }  // namespace nova

@@ -64,6 +64,10 @@ struct GroundTruthView {
   // --holdout run kept out of training), else -1 (a ground-truth camera beside the frames,
   // such as a synthetic scene's held-out cameras).
   int folder_index = -1;
+  // Where the objects are in this view: one channel, the largest of the objects' masks (>= 128
+  // counts as object), as the training rays' regions are drawn; empty when the view's masks
+  // are unknown. nova eval scores the objects and the background apart with it.
+  Image8 objects;
 };
 
 // A composition target: the background plus object instances placed as the spec says.

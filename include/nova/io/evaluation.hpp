@@ -3,6 +3,7 @@
 // nova-bench share one implementation: the scene as the run trained on it, the ground-truth
 // views of a kind or of a split, each view rendered and scored (PSNR and SSIM on 8-bit images,
 // image_metrics.hpp), and the composition targets. Implemented in nova_io (OpenCV).
+#include <cmath>
 #include <functional>
 #include <string>
 #include <utility>
@@ -33,6 +34,9 @@ std::vector<FolderFrame> folder_frames(const Scene& scene);
 struct ViewScore {
   std::string name;  // the view's name as a file stem ('/' -> '_', no ".png")
   double psnr = 0, ssim = 0;
+  // PSNR inside and outside the view's objects (GroundTruthView::objects); NaN where the view
+  // has no masks or the region is empty.
+  double object_psnr = std::nan(""), background_psnr = std::nan("");
 };
 
 // The frames of a split scene (loaded with load_training_scene(..., split)) as ground-truth
@@ -56,5 +60,8 @@ std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene
 
 // Mean PSNR and SSIM (0, 0 when empty).
 std::pair<double, double> mean_scores(const std::vector<ViewScore>& scores);
+
+// Mean object and background PSNR over the views that have them (NaN where none has).
+std::pair<double, double> mean_region_scores(const std::vector<ViewScore>& scores);
 
 }  // namespace nova

@@ -25,6 +25,11 @@ inline uint8_t quantize_unit(float v) {
 // the images are empty.
 double psnr(const Image8& a, const Image8& b);
 
+// PSNR over the pixels a single-channel `region` of the same size selects (value >= 128, or
+// < 128 with `inside` false), every channel of them, by the formula of psnr(). NaN when the
+// region selects no pixel. Throws nova::Error on differing sizes, as psnr().
+double region_psnr(const Image8& a, const Image8& b, const Image8& region, bool inside = true);
+
 // Mean structural similarity (Wang et al. 2004) with the paper's constants: an 11 x 11
 // Gaussian window with sigma 1.5 (normalised to sum 1), K1 = 0.01, K2 = 0.03, L = 255,
 // population (not sample) variances and covariance, i.e.
