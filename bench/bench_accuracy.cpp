@@ -219,7 +219,10 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
   const auto compose_scores = score_compose_targets(renderer, scene, true);
   r.eval_s = since(t0);
   if (!cam0_scores.empty()) std::tie(r.cam0_psnr, r.cam0_ssim) = mean_scores(cam0_scores);
-  if (!held_scores.empty()) std::tie(r.heldout_psnr, r.heldout_ssim) = mean_scores(held_scores);
+  if (!held_scores.empty()) {
+    std::tie(r.heldout_psnr, r.heldout_ssim) = mean_scores(held_scores);
+    std::tie(r.heldout_object_psnr, r.heldout_background_psnr) = mean_region_scores(held_scores);
+  }
   if (!compose_scores.empty()) r.compose_psnr = mean_scores(compose_scores).first;
   r.cam0_views = static_cast<int>(cam0_scores.size());
   r.heldout_views = static_cast<int>(held_scores.size());
@@ -379,7 +382,11 @@ int accuracy(const Args& raw_args) {
       const SceneResult& r = ev.result;
       std::cerr << "  " << r.name << ": " << r.steps << " steps, train " << num_or(r.train_s, 1) << " s, eval "
                 << num_or(r.eval_s, 1) << " s; PSNR camera 0 " << num_or(r.cam0_psnr, 2) << ", held-out "
-                << num_or(r.heldout_psnr, 2) << ", composition " << num_or(r.compose_psnr, 2) << "\n";
+                << num_or(r.heldout_psnr, 2);
+      if (std::isfinite(r.heldout_object_psnr))
+        std::cerr << " (objects " << num_or(r.heldout_object_psnr, 2) << ", background "
+                  << num_or(r.heldout_background_psnr, 2) << ")";
+      std::cerr << ", composition " << num_or(r.compose_psnr, 2) << "\n";
       results.push_back(std::move(ev.result));
     } catch (const std::exception& e) {
       // One failing scene does not stop the rest; the exit code says so.

@@ -147,6 +147,7 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   rs[0].compose_views = 3;
   rs[0].eval_s = 4.25;
   rs[1].heldout_views = 20;
+  rs[1].heldout_object_psnr = 16.12346, rs[1].heldout_background_psnr = 22.5;
   const std::vector<SetSummary> sets = aggregate(rs);
   const std::string csv = csv_text(rs, sets);
   std::vector<SceneResult> back;
@@ -182,6 +183,9 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   BOOST_TEST(scenes[1].at("cam0_psnr").is_null());
   BOOST_TEST(scenes[1].at("status").get<std::string>() == "failed: a, \"b\"");
   BOOST_TEST(scenes[1].at("heldout_psnr").get<double>() == 20.47, boost::test_tools::tolerance(1e-9));
+  BOOST_TEST(scenes[1].at("heldout_object_psnr").get<double>() == 16.1235, boost::test_tools::tolerance(1e-9));
+  BOOST_TEST(scenes[1].at("heldout_background_psnr").get<double>() == 22.5, boost::test_tools::tolerance(1e-9));
+  BOOST_TEST(scenes[0].at("heldout_object_psnr").is_null());
   std::vector<std::string> set_names;
   for (const auto& v : t.at("sets")) set_names.push_back(v.at("set").get<std::string>());
   BOOST_TEST(set_names == (std::vector<std::string>{"dev", "real", "all"}), boost::test_tools::per_element());
