@@ -115,6 +115,18 @@ BOOST_AUTO_TEST_CASE(render_counts_held_out_frames) {
   Result bad = nova_cli("render --run " + run + " --out " + (dir / "none").string() + " --camera 10", dir);
   BOOST_TEST(bad.code == 2);
   BOOST_TEST(bad.err.find("the scene has frames 0..9") != std::string::npos, bad.err);
+  // The held-out frames carry their masks: nova eval scores the objects and the background
+  // apart there (the scene's held-out cameras have no masks and get no such scores).
+  Result e = nova_cli("eval --run " + run + " --views heldout", dir);
+  BOOST_REQUIRE_MESSAGE(e.code == 0, e.err);
+  BOOST_TEST(e.out.find("objects  background") != std::string::npos, e.out);
+  BOOST_TEST(e.out.find("inside the objects' masks") != std::string::npos, e.out);
+  const std::string json = read_all(dir / "run" / "eval.json");
+  const size_t frame = json.find("\"frame_004\"");
+  BOOST_REQUIRE(frame != std::string::npos);
+  BOOST_TEST(json.find("\"object_psnr\"", frame) < json.find("}", frame), json);
+  BOOST_TEST(json.find("\"mean_object_psnr\": ") != std::string::npos);
+  BOOST_TEST(json.find("\"mean_object_psnr\": null") == std::string::npos);
 }
 
 BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {

@@ -63,7 +63,8 @@ BOOST_AUTO_TEST_SUITE(mpi_train)
 BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has_mpi)) {
 #ifdef NOVA_MPIEXEC
   TempDir dir("mpi-train");
-  const std::string scene = " --scene " + cached_tiny_scene().string();
+  // Frames held out, so that nova eval has views with masks (object and background scores).
+  const std::string scene = " --scene " + cached_tiny_scene().string() + " --holdout 4";
   const CommandResult one = run_built("nova", "train --out " + (dir / "one").string() + scene + kOptions, dir);
   BOOST_TEST_REQUIRE(one.code == 0, one.err);
   const auto two_ranks = [&](const std::string& args) { return nova::test::two_ranks(args, dir); };
@@ -86,14 +87,25 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   BOOST_TEST_REQUIRE(e1.code == 0, e1.err);
   const CommandResult e2 = two_ranks("eval --run " + (dir / "eval_two").string());
   BOOST_TEST_REQUIRE(e2.code == 0, e2.err);
-  auto mean_psnr = [](const fs::path& json) {
-    const std::string t = read_all(json);
-    const size_t at = t.find("\"mean_psnr\": ");
-    return at == std::string::npos ? -1.0 : std::stod(t.substr(at + 13));
+  auto mean_of = [](const fs::path& json, const std::string& key) {
+    const std::string t = read_all(json), field = "\"" + key + "\": ";
+    const size_t at = t.find(field);
+    return at == std::string::npos ? -1.0 : std::stod(t.substr(at + field.size()));
   };
-  const double m1 = mean_psnr(dir / "eval_one" / "eval.json"), m2 = mean_psnr(dir / "eval_two" / "eval.json");
+  const double m1 = mean_of(dir / "eval_one" / "eval.json", "mean_psnr"), m2 = mean_of(dir / "eval_two" / "eval.json", "mean_psnr");
   BOOST_TEST(m1 > 5.0);
   BOOST_TEST(std::fabs(m1 - m2) <= 1e-4 * m1, m1 << " against " << m2);
+  // The held-out views, frames with masks among cameras without: the region scores (NaN where
+  // a view has none) are gathered too.
+  const CommandResult h1 = run_built("nova", "eval --views heldout --run " + (dir / "eval_one").string(), dir);
+  BOOST_TEST_REQUIRE(h1.code == 0, h1.err);
+  const CommandResult h2 = two_ranks("eval --views heldout --run " + (dir / "eval_two").string());
+  BOOST_TEST_REQUIRE(h2.code == 0, h2.err);
+  for (const char* key : {"mean_psnr", "mean_object_psnr", "mean_background_psnr"}) {
+    const double a = mean_of(dir / "eval_one" / "eval.json", key), b = mean_of(dir / "eval_two" / "eval.json", key);
+    BOOST_TEST(a > 5.0, key);
+    BOOST_TEST(std::fabs(a - b) <= 1e-4 * a, key << ": " << a << " against " << b);
+  }
 
   // nova render deals the frames out and rank 0 commits one folder: the same files, byte for
   // byte (every rank renders on the same kind of device).

@@ -41,7 +41,14 @@ void print_table(const std::string& title, const std::vector<Score>& scores) {
   for (const Score& s : scores) {
     std::cout << "  " << std::left << std::setw(28) << s.name << std::right << std::fixed << std::setprecision(2)
               << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim;
-    if (regions) std::cout << std::setprecision(2) << std::setw(9) << s.object_psnr << std::setw(12) << s.background_psnr;
+    // "-" where the view has no masks (a synthetic scene's held-out cameras) or no object pixel.
+    const auto region = [](double v, int width) {
+      std::ostringstream o;
+      if (std::isfinite(v)) o << std::fixed << std::setprecision(2) << v;
+      else o << "-";
+      return std::string(static_cast<size_t>(std::max(0, width - static_cast<int>(o.str().size()))), ' ') + o.str();
+    };
+    if (regions) std::cout << region(s.object_psnr, 9) << region(s.background_psnr, 12);
     std::cout << "\n";
   }
 }
