@@ -1,6 +1,7 @@
 // The scene readers on a tiny synthetic scene (exact expectations), the layout variants
 // (DynamicNeRF single mask folder, static-only, LLFF), and one test per bad-input case: each
 // must be a nova::Error with exit code 2 naming the file and the problem.
+#include <algorithm>
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 #include <limits>
@@ -253,6 +254,32 @@ BOOST_AUTO_TEST_CASE(held_out_frames_keep_their_objects_region) {
   BOOST_TEST(s.gt_views[0].objects.data == expected, boost::test_tools::per_element());
   BOOST_TEST(s.gt_views[0].objects.channels == 1);
   BOOST_TEST(s.gt_views[1].objects.empty());
+}
+
+// nova synth writes each ground-truth view's exact objects region beside its image; the
+// reader keeps it (every view of the tiny scene sees an object), a view without one keeps
+// none, and one of another size than its image is refused naming the file.
+BOOST_AUTO_TEST_CASE(ground_truth_views_read_their_objects_region) {
+  BOOST_TEST(ground_truth_objects_name("cam0/000.png") == "cam0/000_objects.png");
+  BOOST_TEST(ground_truth_objects_name("a.b/c") == "a.b/c_objects.png");
+  TempDir tmp("gt-objects");
+  const fs::path dir = copy_tiny_scene(tmp);
+  {
+    const Scene s = load_scene(dir.string());
+    BOOST_REQUIRE(!s.gt_views.empty());
+    for (const GroundTruthView& v : s.gt_views) {
+      BOOST_TEST_REQUIRE(v.objects.width == v.rgb.width, v.name);
+      BOOST_TEST(v.objects.height == v.rgb.height, v.name);
+      BOOST_TEST(std::count(v.objects.data.begin(), v.objects.data.end(), 255) > 0, v.name);
+    }
+  }
+  fs::remove(dir / "gt" / "cam0" / "001_objects.png");
+  write_png((dir / "gt" / "cam0" / "002_objects.png").string(), Image8(5, 4, 1, 255));
+  expect_error([&] { load_scene(dir.string()); }, {"002_objects.png", "5x4", "not the size of its image"});
+  fs::remove(dir / "gt" / "cam0" / "002_objects.png");
+  const Scene s = load_scene(dir.string());
+  for (const GroundTruthView& v : s.gt_views)
+    BOOST_TEST(v.objects.empty() == (v.name == "cam0/001.png" || v.name == "cam0/002.png"), v.name);
 }
 
 BOOST_AUTO_TEST_CASE(bad_missing_frame) {

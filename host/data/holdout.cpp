@@ -1,4 +1,5 @@
-// The hold-out split: plain data work on a Scene, beside the readers that fill one.
+// The hold-out split and the objects region of a ground-truth view: plain data work on a
+// Scene, beside the readers that fill one.
 #include "nova/io/scene_io.hpp"
 
 #include <algorithm>
@@ -9,6 +10,21 @@
 #include "nova/error.hpp"
 
 namespace nova {
+
+Image8 objects_region(const std::vector<Image8>& masks) {
+  if (masks.size() < 2) return {};
+  Image8 out = masks[1];
+  for (size_t k = 2; k < masks.size(); ++k)
+    for (size_t p = 0; p < out.data.size(); ++p) out.data[p] = std::max(out.data[p], masks[k].data[p]);
+  return out;
+}
+
+std::string ground_truth_objects_name(const std::string& image) {
+  const size_t dot = image.rfind('.');
+  const size_t slash = image.rfind('/');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  return (has_ext ? image.substr(0, dot) : image) + "_objects.png";
+}
 
 void hold_out_frames(Scene& scene, int every) {
   if (every <= 0) return;
@@ -31,12 +47,7 @@ void hold_out_frames(Scene& scene, int every) {
     v.time = f.time;
     v.camera = f.camera;
     v.rgb = std::move(f.rgb);
-    if (f.masks.size() > 1) {
-      v.objects = f.masks[1];
-      for (size_t k = 2; k < f.masks.size(); ++k)
-        for (size_t p = 0; p < v.objects.data.size(); ++p)
-          v.objects.data[p] = std::max(v.objects.data[p], f.masks[k].data[p]);
-    }
+    v.objects = objects_region(f.masks);
     scene.gt_views.push_back(std::move(v));
   }
   scene.frames = std::move(kept);

@@ -147,6 +147,14 @@ void read_ground_truth(const path& dir, Scene& scene, const WorldTransform& worl
         throw Error(views.string() + ":" + std::to_string(line_no) + ": time index " +
                     std::to_string(v.time_index) + " out of range");
       v.rgb = read_rgb((gt / v.name).string());
+      const path objects = gt / ground_truth_objects_name(v.name);
+      if (fs::exists(objects)) {
+        v.objects = read_mask(objects.string());
+        if (v.objects.width != v.rgb.width || v.objects.height != v.rgb.height)
+          throw Error(objects.string() + ": " + std::to_string(v.objects.width) + "x" +
+                      std::to_string(v.objects.height) + ", not the size of its image (" +
+                      std::to_string(v.rgb.width) + "x" + std::to_string(v.rgb.height) + ")");
+      }
       v.time = frame_time(v.time_index, int(scene.frames.size()));
       const Camera& ref = frame_cams[0];
       v.camera = ref;

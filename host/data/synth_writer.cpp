@@ -9,6 +9,7 @@
 #include "nova/io/compose_spec_text.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/io/npy.hpp"
+#include "nova/io/scene_io.hpp"
 #include "nova/io/synth.hpp"
 
 namespace nova {
@@ -158,6 +159,8 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
       const SynthRender r = world.render(cam, frame_time(i, n));
       const std::string rel = folder + "/" + frame_name(i) + ".png";
       write_png((root / "gt" / rel).string(), r.rgb);
+      // The exact objects region, so that nova eval scores objects and background apart.
+      if (r.masks.size() > 1) write_png((root / "gt" / ground_truth_objects_name(rel)).string(), objects_region(r.masks));
       append_row(gt_rows, cam, bounds_of(r.depth));
       views += rel + " " + kind + " " + std::to_string(i) + "\n";
     }

@@ -49,4 +49,12 @@ std::string scene_summary(const Scene& scene);
 // "heldout", named frame_III), the LLFF evaluation protocol; Error when fewer than 2 frames.
 void hold_out_frames(Scene& scene, int every);
 
+// Where a view's objects are, from its 1 + K masks: the largest object mask per pixel (one
+// channel; >= 128 is object), as training draws its regions; empty without object masks.
+Image8 objects_region(const std::vector<Image8>& masks);
+
+// The file beside a ground-truth image that holds its objects region (optional; nova synth
+// writes it; any non-zero pixel is object): "cam0/000.png" -> "cam0/000_objects.png".
+std::string ground_truth_objects_name(const std::string& image);
+
 }  // namespace nova
