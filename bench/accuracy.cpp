@@ -283,6 +283,8 @@ std::string json_text(const std::vector<std::pair<std::string, std::string>>& se
                       {"cam0_psnr", json_number(r.cam0_psnr, 4)},
                       {"cam0_ssim", json_number(r.cam0_ssim, 5)},
                       {"cam0_views", r.cam0_views},
+                      {"cam0_object_psnr", json_number(r.cam0_object_psnr, 4)},
+                      {"cam0_background_psnr", json_number(r.cam0_background_psnr, 4)},
                       {"heldout_psnr", json_number(r.heldout_psnr, 4)},
                       {"heldout_ssim", json_number(r.heldout_ssim, 5)},
                       {"heldout_views", r.heldout_views},

@@ -73,8 +73,10 @@ struct SceneResult {
   double cam0_psnr = kNaN, cam0_ssim = kNaN;        // camera 0 at every time (synthetic)
   double heldout_psnr = kNaN, heldout_ssim = kNaN;  // held-out cameras / frames / test split
   double compose_psnr = kNaN;                       // composition targets (synthetic)
-  // Held-out views whose masks are known (a real scene's held-out frames): PSNR inside the
-  // objects' masks and outside them (nova eval's columns). In accuracy.json, not the CSV.
+  // Means over the views whose objects region is known (synthetic ground truth, a real
+  // scene's held-out frames): PSNR inside the objects' masks and outside them (nova eval's
+  // columns). In accuracy.json, not the CSV.
+  double cam0_object_psnr = kNaN, cam0_background_psnr = kNaN;
   double heldout_object_psnr = kNaN, heldout_background_psnr = kNaN;
   int cam0_views = 0, heldout_views = 0, compose_views = 0;
   // What `nova eval` reports by default: camera 0 where the scene has it, else held-out views.

@@ -218,7 +218,10 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
   const auto held_scores = score(held, p.spec.eval_split.empty() ? "held-out" : p.spec.eval_split, cam0.empty());
   const auto compose_scores = score_compose_targets(renderer, scene, true);
   r.eval_s = since(t0);
-  if (!cam0_scores.empty()) std::tie(r.cam0_psnr, r.cam0_ssim) = mean_scores(cam0_scores);
+  if (!cam0_scores.empty()) {
+    std::tie(r.cam0_psnr, r.cam0_ssim) = mean_scores(cam0_scores);
+    std::tie(r.cam0_object_psnr, r.cam0_background_psnr) = mean_region_scores(cam0_scores);
+  }
   if (!held_scores.empty()) {
     std::tie(r.heldout_psnr, r.heldout_ssim) = mean_scores(held_scores);
     std::tie(r.heldout_object_psnr, r.heldout_background_psnr) = mean_region_scores(held_scores);
@@ -380,12 +383,15 @@ int accuracy(const Args& raw_args) {
       Evaluated ev = train_and_evaluate(rt, p, out + "/runs/" + p.spec.dir_name(), o.flag("reuse"));
       if (!ev.picture.empty()) write_png_atomically(out + "/pictures/" + p.spec.dir_name() + ".png", ev.picture);
       const SceneResult& r = ev.result;
+      // Where the views' objects regions are known, the PSNR inside and outside them.
+      const auto regions = [](double object, double background) {
+        return std::isfinite(object) ? " (objects " + num_or(object, 2) + ", background " + num_or(background, 2) + ")"
+                                     : std::string();
+      };
       std::cerr << "  " << r.name << ": " << r.steps << " steps, train " << num_or(r.train_s, 1) << " s, eval "
-                << num_or(r.eval_s, 1) << " s; PSNR camera 0 " << num_or(r.cam0_psnr, 2) << ", held-out "
-                << num_or(r.heldout_psnr, 2);
-      if (std::isfinite(r.heldout_object_psnr))
-        std::cerr << " (objects " << num_or(r.heldout_object_psnr, 2) << ", background "
-                  << num_or(r.heldout_background_psnr, 2) << ")";
+                << num_or(r.eval_s, 1) << " s; PSNR camera 0 " << num_or(r.cam0_psnr, 2)
+                << regions(r.cam0_object_psnr, r.cam0_background_psnr) << ", held-out " << num_or(r.heldout_psnr, 2)
+                << regions(r.heldout_object_psnr, r.heldout_background_psnr);
       std::cerr << ", composition " << num_or(r.compose_psnr, 2) << "\n";
       results.push_back(std::move(ev.result));
     } catch (const std::exception& e) {

@@ -148,6 +148,7 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   rs[0].eval_s = 4.25;
   rs[1].heldout_views = 20;
   rs[1].heldout_object_psnr = 16.12346, rs[1].heldout_background_psnr = 22.5;
+  rs[0].cam0_object_psnr = 15.25, rs[0].cam0_background_psnr = 21.0;
   const std::vector<SetSummary> sets = aggregate(rs);
   const std::string csv = csv_text(rs, sets);
   std::vector<SceneResult> back;
@@ -186,6 +187,8 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   BOOST_TEST(scenes[1].at("heldout_object_psnr").get<double>() == 16.1235, boost::test_tools::tolerance(1e-9));
   BOOST_TEST(scenes[1].at("heldout_background_psnr").get<double>() == 22.5, boost::test_tools::tolerance(1e-9));
   BOOST_TEST(scenes[0].at("heldout_object_psnr").is_null());
+  BOOST_TEST(scenes[0].at("cam0_object_psnr").get<double>() == 15.25);
+  BOOST_TEST(scenes[1].at("cam0_background_psnr").is_null());
   std::vector<std::string> set_names;
   for (const auto& v : t.at("sets")) set_names.push_back(v.at("set").get<std::string>());
   BOOST_TEST(set_names == (std::vector<std::string>{"dev", "real", "all"}), boost::test_tools::per_element());
@@ -218,6 +221,13 @@ BOOST_AUTO_TEST_CASE(runs_on_a_tiny_synthetic_scene) {
   BOOST_TEST(rs[0].cam0_psnr > 5.0);
   BOOST_TEST(rs[0].train_s > 0.0);
   BOOST_TEST(r.out.find("synth:tiny:3") != std::string::npos, r.out);
+  // The synthetic ground truth carries its objects regions: camera 0 is scored inside and
+  // outside them (accuracy.json and the progress line).
+  const nlohmann::json scene = nlohmann::json::parse(read_all(fs::path(out) / "accuracy.json")).at("scenes").at(0);
+  BOOST_TEST(scene.at("cam0_object_psnr").get<double>() > 5.0);
+  BOOST_TEST(scene.at("cam0_background_psnr").get<double>() > 5.0);
+  BOOST_TEST(r.err.find("PSNR camera 0 ") != std::string::npos);
+  BOOST_TEST(r.err.find(" (objects ") != std::string::npos, r.err);
   const Image8 pic = read_rgb((fs::path(out) / "pictures/synth-tiny-3.png").string());
   BOOST_TEST(pic.width >= 6 * 64);  // three times, render and truth
   BOOST_TEST(read_rgb((fs::path(out) / "accuracy.png").string()).width == 1000);
