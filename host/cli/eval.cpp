@@ -1,6 +1,7 @@
 // `nova eval --run RUN`: renders the scene's ground-truth views with the trained run and
 // reports PSNR (OpenCV's number on 8-bit images) and SSIM per view, their means, and for
-// synthetic scenes the composition targets; writes RUN/eval.json and the renders as PNGs.
+// synthetic scenes the composition targets; where a view's objects region is known, also the
+// PSNR inside and outside it. Writes RUN/eval.json and the renders as PNGs.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -31,6 +32,16 @@ bool has_regions(const std::vector<Score>& scores) {
   return std::any_of(scores.begin(), scores.end(), [](const Score& s) { return std::isfinite(s.object_psnr); });
 }
 
+// A region's PSNR right-aligned in `width`; "-" where the view has no masks (a synthetic
+// scene's held-out cameras) or no pixel in the region.
+std::string region_cell(double v, int width) {
+  std::ostringstream o;
+  if (std::isfinite(v)) o << std::fixed << std::setprecision(2) << v;
+  else o << "-";
+  const std::string text = o.str();
+  return std::string(static_cast<size_t>(std::max(0, width - static_cast<int>(text.size()))), ' ') + text;
+}
+
 // With the views' masks known, two more columns: PSNR inside the objects and outside them.
 void print_table(const std::string& title, const std::vector<Score>& scores) {
   const bool regions = has_regions(scores);
@@ -41,14 +52,7 @@ void print_table(const std::string& title, const std::vector<Score>& scores) {
   for (const Score& s : scores) {
     std::cout << "  " << std::left << std::setw(28) << s.name << std::right << std::fixed << std::setprecision(2)
               << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim;
-    // "-" where the view has no masks (a synthetic scene's held-out cameras) or no object pixel.
-    const auto region = [](double v, int width) {
-      std::ostringstream o;
-      if (std::isfinite(v)) o << std::fixed << std::setprecision(2) << v;
-      else o << "-";
-      return std::string(static_cast<size_t>(std::max(0, width - static_cast<int>(o.str().size()))), ' ') + o.str();
-    };
-    if (regions) std::cout << region(s.object_psnr, 9) << region(s.background_psnr, 12);
+    if (regions) std::cout << region_cell(s.object_psnr, 9) << region_cell(s.background_psnr, 12);
     std::cout << "\n";
   }
 }
@@ -64,8 +68,7 @@ double score_value(double v) {
 
 nlohmann::ordered_json json_scores(const std::vector<Score>& scores) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (const Score& s : scores)
-  {
+  for (const Score& s : scores) {
     nlohmann::ordered_json v = {{"name", s.name}, {"psnr", score_value(s.psnr)}, {"ssim", score_value(s.ssim)}};
     if (std::isfinite(s.object_psnr) || std::isfinite(s.background_psnr)) {
       v["object_psnr"] = score_value(s.object_psnr);
