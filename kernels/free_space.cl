@@ -25,15 +25,13 @@ inline float fs_cost(float zs, float zi, float margin, float behind) {
 }
 
 // work[at .. at + 3) = (a, b, n) of the least-squares fit p ~ a + b t over the rays with
-// valid[r] mask[r] (mask row 0); n < 2: no fit. With `anchored` the line goes through
-// (0, anchor): a = anchor, b = sum w (p - anchor) t / sum w t^2 (zero disparity is the far
-// plane, NDC depth 1, where the disparity has no shift). Once per pass, one work-item's fixed-order
+// valid[r] mask[r] (mask row 0); n < 2: no fit. Once per pass, one work-item's fixed-order
 // sums (as depth_moments in kernels/depth_loss.cl), read by every (NeRF, ray) item of the
 // pass: it follows the N R partial sums in the forward's workspace and the N R S
 // transmittances in the backward's.
 __kernel void free_space_fit(__global const float* p, __global const float* t,
                              __global const float* valid, __global const float* mask,
-                             __global float* work, uint at, uint R, int anchored, float anchor) {
+                             __global float* work, uint at, uint R) {
   if (get_global_id(0) != 0) return;
   __global float* fit = work + at;
   float n = 0.0f, sp = 0.0f, st = 0.0f;
@@ -47,17 +45,6 @@ __kernel void free_space_fit(__global const float* p, __global const float* t,
   fit[1] = 0.0f;
   fit[2] = n;
   if (n < 2.0f) return;
-  if (anchored) {
-    float cross = 0.0f, tt = 0.0f;
-    for (uint r = 0; r < R; ++r) {
-      const float w = valid[r] * mask[r];
-      cross += w * (p[r] - anchor) * t[r];
-      tt += w * t[r] * t[r];
-    }
-    fit[0] = anchor;
-    fit[1] = cross / (tt + FIT_EPS * n);
-    return;
-  }
   const float mp = sp / n, mt = st / n;
   float cov = 0.0f, vt = 0.0f;
   for (uint r = 0; r < R; ++r) {

@@ -131,11 +131,9 @@ __kernel void depth_loss_from_moments_backward(__global const float* first, __gl
 }
 
 // The free-space loss' disparity fit (free_space_fit) of the whole batch from its moments
-// (w = valid * mask row 0): work[at .. at + 3) = (a, b, n), n < 2: no fit. With `anchored`
-// the line through (0, anchor), its sums from the moments: sum w t^2 = second[1] + n mt^2,
-// sum w (p - anchor) t = second[2] + n (mp - anchor) mt.
+// (w = valid * mask row 0): work[at .. at + 3) = (a, b, n), n < 2: no fit.
 __kernel void free_space_fit_from_moments(__global const float* first, __global const float* second,
-                                          __global float* work, uint at, int anchored, float anchor) {
+                                          __global float* work, uint at) {
   if (get_global_id(0) != 0) return;
   __global float* fit = work + at;
   const float n = first[0];
@@ -144,11 +142,6 @@ __kernel void free_space_fit_from_moments(__global const float* first, __global 
   fit[2] = n;
   if (n < 2.0f) return;
   const float mp = first[1] / n, mt = first[2] / n;
-  if (anchored) {
-    fit[0] = anchor;
-    fit[1] = (second[2] + n * (mp - anchor) * mt) / (second[1] + n * mt * mt + MOMENT_FIT_EPS * n);
-    return;
-  }
   const float b = second[2] / (second[1] + MOMENT_FIT_EPS * n);
   fit[0] = mp - b * mt;
   fit[1] = b;

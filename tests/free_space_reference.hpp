@@ -15,7 +15,6 @@ namespace nova::test {
 struct FreeSpaceCase {
   size_t N = 0, R = 0, S = 0, C = 5, first = 1;
   float margin = 0.05f, behind = 0.0f;
-  float anchor = NAN;  // finite: the fit through (0, anchor)
   std::vector<float> raw, delta, z, depth, target, valid, masks, noise;  // noise may be empty
   bool per_nerf_delta = true;
 };
@@ -79,15 +78,7 @@ inline double free_space_reference(const FreeSpaceCase& f, const std::vector<flo
     const double w = f.valid[r] * f.masks[r];
     cov += w * (f.depth[r] - mp) * (f.target[r] - mt), vt += w * (f.target[r] - mt) * (f.target[r] - mt);
   }
-  double b = cov / (vt + 1e-6 * n), a = mp - b * mt;
-  if (std::isfinite(f.anchor)) {  // the line through (0, anchor)
-    double cross = 0, tt = 0;
-    for (size_t r = 0; r < f.R; ++r) {
-      const double w = f.valid[r] * f.masks[r];
-      cross += w * (f.depth[r] - f.anchor) * f.target[r], tt += w * double(f.target[r]) * f.target[r];
-    }
-    a = f.anchor, b = cross / (tt + 1e-6 * n);
-  }
+  const double b = cov / (vt + 1e-6 * n), a = mp - b * mt;
   double sum = 0;
   for (size_t k = f.first; k < f.N; ++k)
     for (size_t r = 0; r < f.R; ++r) {
@@ -149,7 +140,7 @@ inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool dep
   Tensor zero = g.input("zero", Shape{R});
   Tensor depth_mse = depth_also_in_mse ? mse(depth, zero) : Tensor{};
   Tensor fs = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, f.first,
-                              f.behind, f.anchor, ranks);
+                              f.behind, ranks);
   g.keep(fs);
   g.set_loss(depth_also_in_mse ? weighted_sum({depth_mse, fs}, {1.0f, 1.0f}) : fs);
   Executor ex(rt, g, guarded_options());

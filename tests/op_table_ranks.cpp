@@ -64,7 +64,7 @@ OpEntry depth_from_moments_entry() {
 
 // free_space_loss with the fit from the whole batch's moments (moment_sums with the masks'
 // weights, free_space_fit_from_moments): 2 NeRFs x rays x 3 samples, the single-process
-// entry's case (free_space_table_case), and its case with the fit through (0, 1), against its float64 loss (rtol 1e-4) and the central
+// entry's case (free_space_table_case), against its float64 loss (rtol 1e-4) and the central
 // differences in sigma (rtol 1e-3, atol 1e-5 of the gradient's scale) as that entry. The
 // depth also feeds an mse, so it takes a gradient: the fit's moments are constants and add
 // none, leaving the mse's 2 depth / R (float32 of two roundings: rtol 1e-6). The check is
@@ -72,8 +72,7 @@ OpEntry depth_from_moments_entry() {
 OpEntry free_space_over_ranks_entry() {
   OpEntry e;
   e.name = "free_space_loss_over_ranks";
-  e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}, {{2, 9, 3}, 0, "2 NeRFs x 9 rays x 3"},
-              {{3, 37, 11}, 4, "3 NeRFs x 37 rays x 11, fit through (0, 1)"}};
+  e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"}, {{2, 9, 3}, 0, "2 NeRFs x 9 rays x 3"}};
   e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, &twin_ranks()); };
   e.values = free_space_values;
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40 + double(s.dims[1]) * 16; };

@@ -68,33 +68,4 @@ BOOST_AUTO_TEST_CASE(haze_in_front_costs_a_surface_does_not) {
   BOOST_TEST(run_device(f).loss == 0.25, boost::test_tools::tolerance(1e-3));
 }
 
-// In NDC a disparity right up to scale gives depth = 1 - k disparity (here k = 1). Two
-// background rays at disparities 0.4 and 0.5 whose rendered depths are a little off that line
-// (0.62 and 0.48 against 0.6 and 0.5) and an object ray at disparity 0.8, beyond them, whose
-// surface is at 0.2; the object's weight sits at 0.1, in front of it.
-//   affine fit:   b = 0.14 / 0.1 = 1.4, a = 0.62 + 1.4 * 0.4 = 1.18: the surface at
-//                 1.18 - 1.4 * 0.8 = 0.06, behind the weight: no loss.
-//   through (0, 1): b = (0.38 * 0.4 + 0.52 * 0.5) / (0.4^2 + 0.5^2) = 1.00488: the surface at
-//                 0.1961, the weight 0.1961 - 0.05 - 0.1 = 0.0461 in front (one ray of three).
-BOOST_AUTO_TEST_CASE(fit_through_the_far_plane_places_an_object_beyond_the_background) {
-  FreeSpaceCase f;
-  f.N = 2, f.R = 3, f.S = 20;
-  f.margin = 0.05f;
-  f.target = {-0.4f, -0.5f, -0.8f};  // minus the disparity
-  f.depth = {0.62f, 0.48f, 0.9f};    // the object ray's rendered depth is not used (mask 0)
-  f.valid = {1.0f, 1.0f, 1.0f};
-  f.masks = {1, 1, 0, 0, 0, 1};      // rays 0 and 1 background, ray 2 the object's
-  f.per_nerf_delta = false;
-  f.delta.assign(f.R * f.S, 0.05f);
-  for (size_t r = 0; r < f.R; ++r)
-    for (size_t i = 0; i < f.S; ++i) f.z.push_back(0.05f * i);
-  f.raw.assign(f.N * f.R * f.S * f.C, 0.0f);
-  f.raw[((1 * f.R + 2) * f.S + 2) * f.C + 3] = 200.0f;  // opaque (alpha 1 - e^-10) at z = 0.1
-  BOOST_TEST(run_device(f).loss == 0.0f);
-  f.anchor = 1.0f;
-  const float anchored = run_device(f).loss;
-  BOOST_TEST(anchored == free_space_reference(f, f.raw), boost::test_tools::tolerance(1e-5));
-  BOOST_TEST(anchored == 0.046098 / 3, boost::test_tools::tolerance(1e-3));
-}
-
 BOOST_AUTO_TEST_SUITE_END()

@@ -14,8 +14,8 @@ namespace {
 // batch's moments of the fit (data-parallel training)].
 class FreeSpaceLossOp final : public Op {
  public:
-  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin, float behind, float anchor, bool moments)
-      : l_(l), noise_(noise), margin_(margin), behind_(behind), anchor_(anchor), moments_(moments) {}
+  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin, float behind, bool moments)
+      : l_(l), noise_(noise), margin_(margin), behind_(behind), moments_(moments) {}
   std::string type() const override { return "free_space_loss"; }
 
   void forward(ExecContext& ctx) override {
@@ -66,23 +66,19 @@ class FreeSpaceLossOp final : public Op {
     if (moments_) {
       ctx.launch("rank_moments", "free_space_fit_from_moments")
           .arg(ctx.in(moments_at())).arg(ctx.in(moments_at() + 1)).arg(ctx.workspace())
-          .arg(detail::u32(at, "free-space workspace")).arg(anchored()).arg(anchor_value()).run(1);
+          .arg(detail::u32(at, "free-space workspace")).run(1);
       return;
     }
     ctx.launch("free_space", "free_space_fit")
         .arg(ctx.in(3)).arg(ctx.in(4)).arg(ctx.in(5)).arg(ctx.in(6)).arg(ctx.workspace())
-        .arg(detail::u32(at, "free-space workspace")).arg(detail::u32(l_.rays, "rays"))
-        .arg(anchored()).arg(anchor_value()).run(1);
+        .arg(detail::u32(at, "free-space workspace")).arg(detail::u32(l_.rays, "rays")).run(1);
   }
-
-  int anchored() const { return std::isfinite(anchor_) ? 1 : 0; }
-  float anchor_value() const { return std::isfinite(anchor_) ? anchor_ : 0.0f; }
 
   size_t moments_at() const { return noise_ ? 8 : 7; }
 
   detail::RaySampleLayout l_;
   bool noise_;
-  float margin_, behind_, anchor_;  // anchor: NaN for the affine fit
+  float margin_, behind_;
   bool moments_;
 };
 
@@ -90,7 +86,7 @@ class FreeSpaceLossOp final : public Op {
 
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise, float margin,
-                       size_t first_nerf, float behind, float anchor, GradientReducer* ranks) {
+                       size_t first_nerf, float behind, GradientReducer* ranks) {
   const auto l = detail::ray_sample_layout("free_space_loss", raw, delta, z, noise, first_nerf);
   const auto bad = [](const std::string& what) { throw Error("free_space_loss: " + what, kExitInternal); };
   for (const Tensor& t : {depth, target, valid})
@@ -114,8 +110,7 @@ Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor 
     inputs.push_back(m.first);
     inputs.push_back(m.second);
   }
-  if (std::isinf(anchor)) bad("anchor must be finite, or NaN for the affine fit");
-  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin, behind, anchor, split), inputs, {y});
+  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin, behind, split), inputs, {y});
   return y;
 }
 

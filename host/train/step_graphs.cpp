@@ -39,7 +39,7 @@ Tensor with_free_space_term(StepGraph& s, const TrainConfig& c, const RayGeometr
   add_depth_inputs(s, c);
   Tensor f = free_space_loss(raw, smp.delta, smp.z, depth, s.target_depth, s.depth_valid,
                              s.target_masks, s.noise, c.free_space_margin, 1,
-                             c.free_space_behind, c.free_space_fit_far ? 1.0f : NAN, slice.ranks);
+                             c.free_space_behind, slice.ranks);
   s.terms.emplace_back("free_space", f);
   return weighted_sum({loss, f}, {1.0f, c.w_free_space});
 }

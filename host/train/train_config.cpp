@@ -233,9 +233,6 @@ std::vector<ConfigOption> make_options() {
   o.push_back(float_option("free-space-behind", "free-space loss: weight of object weight more than the margin behind the disparity's surface, relative to in front (0: in front only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.free_space_behind; }));
   o.back().before = "0";
-  o.push_back(bool_option("free-space-fit-far", "free-space loss: place the disparity's surface by a line through the far plane (zero disparity at NDC depth 1: a scale alone) instead of a scale and a shift fitted on background rays",
-                          [](TrainConfig& c) -> bool& { return c.free_space_fit_far; }));
-  o.back().before = "false";
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(bool_option("occupancy", "skip empty space: occupancy grids from the density, samples in empty cells never reach an MLP",

@@ -1,8 +1,6 @@
 #pragma once
 // The NOVA training losses as graph ops, and the builder that assembles the weighted total.
 // A term whose weight is 0 is not built into the graph at all (no op, no kernel, no memory).
-#include <cmath>
-
 #include "nova/distributed.hpp"
 #include "nova/graph.hpp"
 #include "nova/render.hpp"
@@ -68,14 +66,10 @@ Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Te
 // surface, is pulled to the disparity's depth too. raw, delta, z, masks, noise as
 // distortion_loss; depth, target, valid [R] as depth_loss. With `ranks` of more than one rank
 // the fit is the whole batch's, as depth_loss's statistics (the mean over (NeRF, ray) pairs
-// needs nothing more: each rank has the same share of them). With a finite `anchor` the fit
-// is the line through (0, anchor), depth = anchor + b target: in NDC zero disparity is the far
-// plane at depth 1, so a disparity right up to scale needs only b, which the background then
-// fixes without extrapolating an intercept to the objects' disparities.
+// needs nothing more: each rank has the same share of them).
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise = {}, float margin = 0.05f,
-                       size_t first_nerf = 1, float behind = 0.0f, float anchor = NAN,
-                       GradientReducer* ranks = nullptr);
+                       size_t first_nerf = 1, float behind = 0.0f, GradientReducer* ranks = nullptr);
 
 // Per-NeRF mask loss of the reference code: sum over NeRFs n of the mean over rays r of
 // |mask_n(r) - target_n(r)|. mask [N, R] (render_composite's), target [N, R] (data).

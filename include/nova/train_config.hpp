@@ -54,9 +54,6 @@ struct TrainConfig : ModelConfig {
   // Weight more than the margin *behind* that depth costs free_space_behind times as much: an
   // object pushed back along the one camera's rays renders the same training image.
   float free_space_behind = 0.0f;
-  // The free-space loss' disparity-to-depth fit through the far plane (zero disparity at NDC
-  // depth 1: a slope alone) instead of a slope and an intercept (free_space_loss's anchor).
-  bool free_space_fit_far = false;
   // Empty-space skipping (occupancy.hpp; on with ModelConfig::occupancy): one grid per NeRF,
   // updated from the density every occupancy_every steps once occupancy_warmup steps of a
   // phase have passed; samples in empty cells never reach an MLP.
