@@ -73,6 +73,10 @@ BOOST_AUTO_TEST_CASE(reads_synthetic_scene) {
     BOOST_TEST(std::abs(s.gt_views[0].camera.c2w[k] - s.frames[0].camera.c2w[k]) < 1e-12);
   BOOST_TEST((s.gt_views[0].rgb.data == s.frames[0].rgb.data));
   BOOST_TEST(scene_summary(s).find("3 (1 static + 2 objects)") != std::string::npos);
+  // Every ground-truth view of the tiny scene has its objects region.
+  const std::string regions = "ground truth " + std::to_string(s.gt_views.size()) + " views (" +
+                              std::to_string(s.gt_views.size()) + " with objects regions)";
+  BOOST_TEST(scene_summary(s).find(regions) != std::string::npos, scene_summary(s));
 }
 
 BOOST_AUTO_TEST_CASE(dynamicnerf_single_mask_folder) {

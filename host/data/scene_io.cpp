@@ -1,6 +1,7 @@
 // Format detection, the load_scene entry point, and the printed scene summary.
 #include "nova/io/scene_io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -70,8 +71,10 @@ std::string scene_summary(const Scene& s) {
       span = std::max(span, std::abs(f.camera.position(r) - s.frames[0].camera.position(r)));
   o << "  cameras     max offset from frame 0: " << span << "\n";
   o << "  disparity   " << (s.frames[0].disparity.empty() ? "none" : "yes") << "\n";
-  o << "  ground truth " << s.gt_views.size() << " views, " << s.compose.targets.size()
-    << " composition targets\n";
+  const auto with_regions = std::count_if(s.gt_views.begin(), s.gt_views.end(),
+                                          [](const GroundTruthView& v) { return !v.objects.empty(); });
+  o << "  ground truth " << s.gt_views.size() << " views (" << with_regions << " with objects regions), "
+    << s.compose.targets.size() << " composition targets\n";
   for (const auto& n : s.notes) o << "  - " << n << "\n";
   return o.str();
 }
