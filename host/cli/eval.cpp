@@ -32,8 +32,8 @@ bool has_regions(const std::vector<Score>& scores) {
   return std::any_of(scores.begin(), scores.end(), [](const Score& s) { return std::isfinite(s.object_psnr); });
 }
 
-// A region's PSNR right-aligned in `width`; "-" where the view has no masks (a synthetic
-// scene's held-out cameras) or no pixel in the region.
+// A region's PSNR right-aligned in `width`; "-" where the view has no objects region (a gt/
+// view without an _objects.png) or no pixel in it.
 std::string region_cell(double v, int width) {
   std::ostringstream o;
   if (std::isfinite(v)) o << std::fixed << std::setprecision(2) << v;
