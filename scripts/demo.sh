@@ -33,6 +33,6 @@ $nova render --run "$out/run" --out "$out/compose" --compose "$out/compose.txt"
 
 echo
 echo "main job done in $(( $(date +%s) - start )) s"
-grep -E "mean PSNR|composition targets:" "$out/eval.txt" || true
+grep -E "mean PSNR|inside the objects|composition targets:" "$out/eval.txt" || true
 echo "pictures: $out/run/eval/ (camera-0 renders, composition targets),"
 echo "          $out/compose/three_instances.png (+ _depth, _mask0..3: the three-instance composite)"
