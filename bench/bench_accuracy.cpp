@@ -391,8 +391,8 @@ int accuracy(const Args& raw_args) {
       std::cerr << "  " << r.name << ": " << r.steps << " steps, train " << num_or(r.train_s, 1) << " s, eval "
                 << num_or(r.eval_s, 1) << " s; PSNR camera 0 " << num_or(r.cam0_psnr, 2)
                 << regions(r.cam0_object_psnr, r.cam0_background_psnr) << ", held-out " << num_or(r.heldout_psnr, 2)
-                << regions(r.heldout_object_psnr, r.heldout_background_psnr);
-      std::cerr << ", composition " << num_or(r.compose_psnr, 2) << "\n";
+                << regions(r.heldout_object_psnr, r.heldout_background_psnr) << ", composition "
+                << num_or(r.compose_psnr, 2) << "\n";
       results.push_back(std::move(ev.result));
     } catch (const std::exception& e) {
       // One failing scene does not stop the rest; the exit code says so.

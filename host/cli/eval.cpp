@@ -190,7 +190,8 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   json["mean_psnr"] = score_value(mp);
   json["mean_ssim"] = score_value(ms);
   const auto [mop, mbp] = mean_region_scores(scores);
-  if (has_regions(scores)) {
+  const bool regions = std::isfinite(mop);  // some view has an objects region
+  if (regions) {
     json["mean_object_psnr"] = score_value(mop);
     json["mean_background_psnr"] = score_value(mbp);
   }
@@ -207,7 +208,7 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   std::filesystem::rename(path + ".tmp", path);
   std::cout << std::fixed << std::setprecision(2);
   if (!scores.empty()) std::cout << "mean PSNR " << mp << " dB, SSIM " << std::setprecision(4) << ms << " over " << scores.size() << " views\n";
-  if (has_regions(scores))
+  if (regions)
     std::cout << "inside the objects' masks " << std::setprecision(2) << mop << " dB, outside " << mbp << " dB\n";
   if (!compose.empty())
     std::cout << "composition targets: mean PSNR " << std::setprecision(2) << cp << " dB over " << compose.size() << "\n";

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <utility>
 #include <vector>
 
@@ -20,10 +21,7 @@ Image8 objects_region(const std::vector<Image8>& masks) {
 }
 
 std::string ground_truth_objects_name(const std::string& image) {
-  const size_t dot = image.rfind('.');
-  const size_t slash = image.rfind('/');
-  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
-  return (has_ext ? image.substr(0, dot) : image) + "_objects.png";
+  return std::filesystem::path(image).replace_extension().string() + "_objects.png";
 }
 
 void hold_out_frames(Scene& scene, int every) {

@@ -61,6 +61,12 @@ std::vector<double> filter_valid(const std::vector<double>& src, int w, int h,
   return out;
 }
 
+// OpenCV's PSNR of a sum of squared 8-bit differences over `count` values.
+double psnr_of_sse(uint64_t sse, uint64_t count) {
+  const double diff = std::sqrt(double(sse) / double(count));
+  return 20 * std::log10(255.0 / (diff + DBL_EPSILON));
+}
+
 }  // namespace
 
 double psnr(const Image8& a, const Image8& b) {
@@ -71,8 +77,7 @@ double psnr(const Image8& a, const Image8& b) {
     const int d = int(a.data[i]) - int(b.data[i]);
     sse += uint64_t(d * d);
   }
-  const double diff = std::sqrt(double(sse) / double(a.data.size()));
-  return 20 * std::log10(255.0 / (diff + DBL_EPSILON));
+  return psnr_of_sse(sse, a.data.size());
 }
 
 double region_psnr(const Image8& a, const Image8& b, const Image8& region, bool inside) {
@@ -91,9 +96,7 @@ double region_psnr(const Image8& a, const Image8& b, const Image8& region, bool 
     }
     count += c;
   }
-  if (count == 0) return std::nan("");
-  const double diff = std::sqrt(double(sse) / double(count));
-  return 20 * std::log10(255.0 / (diff + DBL_EPSILON));
+  return count == 0 ? std::nan("") : psnr_of_sse(sse, count);
 }
 
 double ssim(const Image8& a, const Image8& b) {
