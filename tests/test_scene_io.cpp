@@ -280,6 +280,8 @@ BOOST_AUTO_TEST_CASE(ground_truth_views_read_their_objects_region) {
   fs::remove(dir / "gt" / "cam0" / "001_objects.png");
   write_png((dir / "gt" / "cam0" / "002_objects.png").string(), Image8(5, 4, 1, 255));
   expect_error([&] { load_scene(dir.string()); }, {"002_objects.png", "5x4", "not the size of its image"});
+  write_all(dir / "gt" / "cam0" / "002_objects.png", "not a png");
+  expect_error([&] { load_scene(dir.string()); }, {"002_objects.png"});
   fs::remove(dir / "gt" / "cam0" / "002_objects.png");
   const Scene s = load_scene(dir.string());
   for (const GroundTruthView& v : s.gt_views)
