@@ -63,8 +63,9 @@ __kernel void pack_flags(__global const float* positions, __global const uchar* 
     uint c = 0;
     for (int d = 2; d >= 0; --d) {
       const float u = (p[d] + bound[b]) * scale[b];
-      // NaN compares false and lands in cell 0, as on the host.
-      const int i = u >= 0.0f ? min((int)u, n - 1) : 0;
+      // NaN compares false and lands in cell 0, as on the host. Clamped as a float first: a
+      // point turned out to infinity (an instance seen edge-on in NDC) must not overflow int.
+      const int i = u >= 0.0f ? (int)fmin(u, (float)(n - 1)) : 0;
       c = c * (uint)n + (uint)i;
     }
     keep = occupied[cell_offset[b] + c];

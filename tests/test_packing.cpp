@@ -16,6 +16,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
+#include <limits>
 #include <memory>
 
 #include "harness.hpp"
@@ -53,7 +55,8 @@ std::vector<std::vector<size_t>> reference_kept(const std::vector<float>& pos, c
       size_t c = 0;
       for (int d = 2; d >= 0; --d) {
         const double u = (double(pos[(b * M + m) * 3 + d]) + 1.0) / 2.0 * g.resolution;
-        const int i = std::clamp(static_cast<int>(std::floor(u)), 0, g.resolution - 1);
+        // NaN lands in cell 0; anything beyond the box (infinity too) on its face.
+        const int i = std::isnan(u) ? 0 : static_cast<int>(std::clamp(std::floor(u), 0.0, g.resolution - 1.0));
         c = c * static_cast<size_t>(g.resolution) + static_cast<size_t>(i);
       }
       if (g.occupied[c]) kept[b].push_back(m);
@@ -143,6 +146,12 @@ BOOST_AUTO_TEST_CASE(grid_geometry_and_update) {
   const float outside[3] = {-5.0f, 0.1f, 9.0f};  // clamps like the hash grid
   const float clamped[3] = {-1.99f, 0.1f, 1.99f};
   BOOST_TEST(g.cell_of(outside) == g.cell_of(clamped));
+  // Beyond int's range (a turned instance's far samples in NDC): the faces, not a wild index.
+  const float inf = std::numeric_limits<float>::infinity();
+  const float far[3] = {inf, -1e30f, 3e9f}, far_clamped[3] = {1.99f, -1.99f, 1.99f};
+  BOOST_TEST(g.cell_of(far) == g.cell_of(far_clamped));
+  const float nan_x[3] = {std::nanf(""), 0.1f, -inf}, nan_clamped[3] = {-1.99f, 0.1f, -1.99f};
+  BOOST_TEST(g.cell_of(nan_x) == g.cell_of(nan_clamped));
   g.update({3, 4}, {0.0f, 0.05f}, 0.5f);
   g.refresh();
   BOOST_TEST(!g.occupied[3]);  // evaluated empty
@@ -177,6 +186,31 @@ BOOST_AUTO_TEST_CASE(pack_gather_scatter_match_reference) {
         ref[(b * M + m) * H + o] = std::max(0.0, h);
       }
   test::expect_close(out, ref, 1e-5, 1e-5, "packed MLP scattered back");
+}
+
+// Samples far outside the box, infinite or NaN (an instance turned edge-on in NDC sends its
+// far samples to infinity) pack by the box's faces (NaN: cell 0), as the host grid does.
+BOOST_AUTO_TEST_CASE(far_and_non_finite_positions_pack_by_the_box_faces) {
+  auto sel = two_grid_select();
+  auto pos = random_floats(B * M * D, -1.2f, 1.2f, 17);
+  const float inf = std::numeric_limits<float>::infinity();
+  const float wild[] = {inf, -inf, 1e30f, -1e30f, 3e9f, -3e9f, std::nanf("")};
+  for (size_t i = 0; i < pos.size(); i += 5) pos[i] = wild[(i / 5) % std::size(wild)];
+  const auto kept = reference_kept(pos, *sel);
+  const auto out = run_pack_roundtrip(sel, pos, M);
+  BOOST_TEST(sel->kept == kept[0].size() + kept[1].size());
+  size_t mismatches = 0;
+  for (size_t b = 0; b < B; ++b) {
+    std::vector<uint8_t> ref(M, 0);
+    for (size_t m : kept[b]) ref[m] = 1;
+    for (size_t m = 0; m < M; ++m) {
+      const float* o = &out[(b * M + m) * D];
+      const bool filled = o[0] == -7.0f && o[1] == -7.0f && o[2] == -7.0f;
+      mismatches += filled == static_cast<bool>(ref[m]);
+    }
+  }
+  BOOST_TEST(mismatches == 0u);
+  for (const auto& k : kept) BOOST_TEST((k.size() > M / 4 && k.size() < 3 * M / 4));
 }
 
 BOOST_AUTO_TEST_CASE(all_empty_gives_the_fill) {

@@ -30,8 +30,9 @@ size_t OccupancyGrid::cell_of(const float* p) const {
   size_t c = 0;
   for (int d = 2; d >= 0; --d) {
     const float u = (p[d] + bound) * scale;
-    // NaN compares false and lands in cell 0; the field clamps the same way.
-    const int i = u >= 0.0f ? std::min(static_cast<int>(u), resolution - 1) : 0;
+    // NaN compares false and lands in cell 0; the field clamps the same way. Clamped as a
+    // float first: converting a float beyond int's range (a point at infinity) is undefined.
+    const int i = u >= 0.0f ? static_cast<int>(std::min(u, static_cast<float>(resolution - 1))) : 0;
     c = c * static_cast<size_t>(resolution) + static_cast<size_t>(i);
   }
   return c;
