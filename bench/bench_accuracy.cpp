@@ -209,9 +209,8 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
   const auto score = [&](const std::vector<GroundTruthView>& views, const std::string& what, bool pictured) {
     const auto s = score_views(renderer, scene.num_objects, views, false, [&](size_t i, const std::string& stem, const Image8& o) {
       if (pictured) keep(i, stem, o);
-      std::cerr << "\r  evaluated " << i + 1 << "/" << views.size() << " " << what << " views" << std::flush;
+      count_progress("  evaluated " + what + " views", i + 1, views.size());
     });
-    if (!views.empty()) std::cerr << "\n";
     return s;
   };
   const auto cam0_scores = score(cam0, "camera-0", true);

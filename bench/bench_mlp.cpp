@@ -144,7 +144,17 @@ int mlp(const Args& args) {
                          {"torch", "auto"}, {"torch-threads", "0"}, {"torch-device", "cpu"}});
   if (o.help()) {
     std::cout << o.usage("nova-bench mlp")
-              << "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path\n"
+              << "\nTimes the paper's MLP (63 -> depth x width -> 4) forward and training step per batch,\n"
+                 "then the hidden width x width layer's GEMMs beside the host BLAS, then one fused layer\n"
+                 "against its two ops, and finally PyTorch on the same MLP.\n\n"
+                 "--batches: comma list of row counts (samples) per pass\n"
+                 "--repeats: timed repetitions per measurement (the median is reported)\n"
+                 "--width, --depth: the MLP's hidden width and number of hidden layers\n"
+                 "--gemm: comma list of GEMM providers to time (tuned, clblast, kernels, host)\n"
+                 "--layer: width of the hidden layer whose GEMMs are compared with the host BLAS\n"
+                 "--fused-widths: comma list of layer widths for the fused-against-two-ops comparison\n"
+                 "--device: OpenCL device, as nova's --device\n"
+                 "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path\n"
                  "--torch-threads: PyTorch's threads (0: this machine's hardware threads)\n"
                  "--torch-device: PyTorch's device, cpu or cuda (a GPU's nova beside PyTorch on the same GPU)\n";
     return 0;

@@ -59,15 +59,17 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   BOOST_TEST(fs::exists(dir / "frames" / "video.mp4") == video_supported());
   BOOST_TEST(!fs::exists(dir / "frames.partial"));
 
-  // A composition of three instances (one object twice), from a spec the user wrote.
+  // A composition of three instances (one object twice), from a spec the user wrote, and an
+  // object turned edge-on (in NDC its far samples go to infinity and must pack all the same).
   write_all(dir / "spec.txt",
             "nova-compose 1\ntarget three camera=2\n"
             "instance object=1 time=-1\ninstance object=1 time=0.2 translate=0.1,0,0\n"
-            "instance object=2 time=0 rotate=0,30,0\n");
+            "instance object=2 time=0 rotate=0,30,0\n"
+            "target edge_on camera=0\ninstance object=1 time=0 rotate=0,90,0\n");
   Result c = nova_cli("render --run " + run + " --out " + (dir / "comp").string() + " --compose " +
                           (dir / "spec.txt").string(), dir);
   BOOST_REQUIRE_MESSAGE(c.code == 0, c.err);
-  for (const char* f : {"three.png", "three_depth.png", "three_mask0.png", "three_mask3.png"})
+  for (const char* f : {"three.png", "three_depth.png", "three_mask0.png", "three_mask3.png", "edge_on.png"})
     BOOST_TEST(fs::exists(dir / "comp" / f), f);
   // Each instance's pivot and where it came from (none is given: the density, or the origin
   // with a warning where this 9-step run's object has none).
@@ -94,10 +96,32 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   BOOST_TEST(eb.err.find("composition target objects_only shows nothing") != std::string::npos, eb.err);
   BOOST_TEST(eb.out.find("objects_only") == std::string::npos, eb.out);
 
-  // Resume continues the same run to a longer schedule.
-  Result more = nova_cli("train --scene " + scene + " --out " + run + " --resume --steps 9", dir);
+  // config.ini names the scene by its absolute path: eval finds it from any folder.
+  const std::string config = read_all(dir / "run" / "config.ini");
+  BOOST_TEST(config.find("\nscene = " + fs::absolute(scene).lexically_normal().string() + "\n") != std::string::npos, config);
+  Result elsewhere = run_built("nova", "eval --run " + fs::absolute(run).string() + " --views cam0", dir, "cd / &&");
+  BOOST_TEST(elsewhere.code == 0, elsewhere.err);
+
+  // A resume the checkpoint refuses (fewer steps than it has done) leaves config.ini as it was.
+  Result shorter = nova_cli("train --out " + run + " --resume --steps 2", dir);
+  BOOST_TEST(shorter.code == 2, shorter.err);
+  BOOST_TEST(shorter.err.find("does not fit this run") != std::string::npos, shorter.err);
+  BOOST_TEST(read_all(dir / "run" / "config.ini") == config);
+
+  // Resume continues the same run to a longer schedule, on the scene config.ini names.
+  Result more = nova_cli("train --out " + run + " --resume --steps 9", dir);
   BOOST_REQUIRE_MESSAGE(more.code == 0, more.err);
   BOOST_TEST(more.err.find("resumed at step 9") != std::string::npos);
+  BOOST_TEST(read_all(dir / "run" / "config.ini").find("\nsteps = 9\n") != std::string::npos);
+
+  // A pose as 12 numbers with commas, or as separate words.
+  Result pc = nova_cli("render --run " + run + " --out " + (dir / "pose_commas").string() +
+                           " --time 0 --no-masks --pose '1,0,0,0,0,1,0,0,0,0,1,0'", dir);
+  BOOST_TEST(pc.code == 0, pc.err);
+  Result pw = nova_cli("render --run " + run + " --out " + (dir / "pose_words").string() +
+                           " --time 0 --no-masks --pose 1 0 0 0 0 1 0 0 0 0 1 0", dir);
+  BOOST_TEST(pw.code == 0, pw.err);
+  BOOST_TEST(read_all(dir / "pose_commas" / "000.png") == read_all(dir / "pose_words" / "000.png"));
 }
 
 // A run trained with --holdout still renders every frame of its scene folder: --camera and
@@ -161,8 +185,32 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
   BOOST_TEST(!fs::exists(dir / "comp"));
   BOOST_TEST(!fs::exists(dir / "comp.partial"));
   expect("render --run " + out + " --out " + (dir / "r").string() + " --camera 99", "--camera 99");
-  expect("render --run " + out + " --out " + (dir / "r").string() + " --pose 1,2,3", "--pose");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --pose 1,2,3", "got 3");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --pose 1,0,0,0,0,1,0,0,0,0,1,nan", "'nan'");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --pose 0,0,0,0,0,0,0,0,0,0,0,0", "not a rotation");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --pose 2,0,0,0,0,1,0,0,0,0,1,0", "not a rotation");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --camera 1 --pose 1,0,0,0,0,1,0,0,0,0,1,0",
+         "--camera and --pose");
   expect("render --run " + out + " --out " + (dir / "r").string() + " --time 3", "--time");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --fps 30", "--fps");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --video --fps 0", "--fps 0");
+  write_all(dir / "ok.txt", "nova-compose 1\ntarget t camera=0\ninstance object=1 time=0\n");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --compose " + (dir / "ok.txt").string() +
+             " --time 0", "--time does not apply to --compose");
+  write_all(dir / "late.txt", "nova-compose 1\ntarget t camera=0\ninstance object=1 time=3\n");
+  expect("render --run " + out + " --out " + (dir / "r").string() + " --compose " + (dir / "late.txt").string(),
+         "time must be in [-1, 1]");
+  expect("eval --run " + out + " --views cam0 --split test", "--views and --split");
+  // An --out below a file is refused before any work, for every command that writes one.
+  write_all(dir / "afile", "x");
+  const std::string below = (dir / "afile" / "x").string();
+  expect("render --run " + out + " --out " + below, "is not a folder");
+  expect("train --scene " + scene + " --out " + below + kTiny, "is not a folder");
+  expect("synth --preset tiny --out " + below, "is not a folder");
+  expect("synth --preset tiny --seed -1 --out " + (dir / "s").string(), "--seed -1");
+  expect("train --scene " + scene + " --out " + (dir / "f").string() + " --factor 64" + kTiny, "--factor 64");
+  BOOST_TEST(!fs::exists(dir / "f"));
+  BOOST_TEST(!fs::exists(dir / "s"));
   expect("render --run " + (dir / "norun").string() + " --out " + (dir / "r").string(), "norun");
   expect("eval --run " + out + " --views sideways", "sideways");
   // A damaged checkpoint is named as such.

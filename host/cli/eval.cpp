@@ -101,12 +101,15 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string run_dir = vm["run"].as<std::string>();
   const std::string split = vm["split"].as<std::string>();
+  if (!split.empty() && !vm["views"].defaulted())
+    throw Error("--views and --split both choose the views: pass one (--split scores that split's frames)");
   OpenRun run = open_run(run_dir, vm["scene"].as<std::string>(), true);
   Scene& scene = run.scene;
   std::vector<GroundTruthView> views;
   if (!split.empty()) {
     // A held-out split of the same scene (its own frames are the ground truth).
-    Scene s = load_training_scene(run.files.scene, run.files.config, false, split);
+    const std::string& scene_dir = vm["scene"].as<std::string>();
+    Scene s = load_training_scene(scene_dir.empty() ? run.files.scene : scene_dir, run.files.config, false, split);
     views = split_views(s, split);
   } else {
     std::string kind = vm["views"].as<std::string>();
@@ -150,10 +153,9 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   const auto write_and_count = [&](size_t i, const std::string& stem, const Image8& out) {
     write(i, stem, out);
     progress.start("view " + std::to_string(i + 2) + "/" + std::to_string(views.size()));
-    if (lead) std::cerr << "\revaluated " << i + 1 << "/" << views.size() << std::flush;
+    if (lead) count_progress("evaluated", i + 1, views.size());
   };
   std::vector<Score> scores = score_views(renderer, scene.num_objects, views, blend.scene_views, write_and_count);
-  if (!views.empty() && lead) std::cerr << "\n";
   if (mpi) {  // every view's scores, in the order of all views, on every rank (NaN travels as is)
     constexpr size_t kFields = 4;
     std::vector<float> v(kFields * all_views.size(), 0.0f);

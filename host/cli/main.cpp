@@ -34,6 +34,7 @@ void usage(std::ostream& os) {
         "commands:\n";
   for (const auto& c : nova::cli::commands())
     os << "  " << c.name << std::string(12 - std::strlen(c.name), ' ') << c.summary << "\n";
+  os << "  --version   print nova's version\n";
   os << "\nThe device is chosen with --device (P:D or a name substring) or NOVA_DEVICE;\n"
         "the default is the first GPU, else the first CPU.\n";
 }
@@ -46,6 +47,10 @@ int main(int argc, char** argv) {
     return argc < 2 ? nova::kExitUsage : 0;
   }
   const std::string name = argv[1];
+  if (name == "--version" || name == "version") {
+    std::cout << "nova " << NOVA_VERSION << "\n";
+    return 0;
+  }
   for (const auto& c : nova::cli::commands()) {
     if (name != c.name) continue;
     try {

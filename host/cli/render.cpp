@@ -2,11 +2,15 @@
 // (a frame's camera, held-out frames included, or --pose) at one time or at every frame's time, writing colour,
 // depth and per-NeRF masks as PNG frames (and an MP4 with --video). With --compose SPEC:
 // every target of a composition spec (io/compose_spec_text.hpp), hard-blended (add_blend_options).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 #include "cli/mpi_job.hpp"
 #include "cli/options.hpp"
@@ -21,17 +25,49 @@
 namespace nova::cli {
 namespace {
 
-Camera parse_pose(const std::string& text, Camera base) {
-  std::istringstream in(text);
-  std::array<double, 12> m{};
-  for (double& x : m)
-    if (!(in >> x)) throw Error("--pose: expected 12 numbers (the 3x4 camera-to-world matrix, row-major), got '" + text + "'");
-  std::string rest;
-  if (in >> rest) throw Error("--pose: more than 12 numbers in '" + text + "'");
-  for (double x : m)
-    if (!std::isfinite(x)) throw Error("--pose: '" + text + "' holds a non-finite number");
-  base.c2w = m;
+// 12 numbers separated by spaces or commas, in one argument or several; the 3x3 part must be
+// a rotation (rays are built from its columns as unit axes).
+Camera parse_pose(const std::vector<std::string>& words, Camera base) {
+  std::string text;
+  for (const std::string& w : words) text += (text.empty() ? "" : " ") + w;
+  std::string spaced = text;
+  for (char& ch : spaced)
+    if (ch == ',') ch = ' ';
+  std::istringstream in(spaced);
+  std::vector<double> m;
+  for (std::string word; in >> word;) {
+    char* end = nullptr;
+    const double x = std::strtod(word.c_str(), &end);
+    if (end == word.c_str() || *end != '\0') throw Error("--pose: '" + word + "' in '" + text + "' is not a number");
+    if (!std::isfinite(x)) throw Error("--pose: '" + word + "' in '" + text + "' is not finite");
+    m.push_back(x);
+  }
+  if (m.size() != 12)
+    throw Error("--pose: expected 12 numbers (the 3x4 camera-to-world matrix, row-major), got " +
+                std::to_string(m.size()) + " in '" + text + "'");
+  // Columns orthonormal to 1e-3 (six printed digits pass) and a right-handed frame.
+  double worst = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      double dot = 0;
+      for (int r = 0; r < 3; ++r) dot += m[static_cast<size_t>(r * 4 + a)] * m[static_cast<size_t>(r * 4 + b)];
+      worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
+    }
+  const auto at = [&](int r, int c) { return m[static_cast<size_t>(r * 4 + c)]; };
+  const double det = at(0, 0) * (at(1, 1) * at(2, 2) - at(1, 2) * at(2, 1)) -
+                     at(0, 1) * (at(1, 0) * at(2, 2) - at(1, 2) * at(2, 0)) +
+                     at(0, 2) * (at(1, 0) * at(2, 1) - at(1, 1) * at(2, 0));
+  if (worst > 1e-3 || det < 0)
+    throw Error("--pose: the 3x3 part of '" + text + "' is not a rotation (orthonormal columns, determinant +1)");
+  std::copy(m.begin(), m.end(), base.c2w.begin());
   return base;
+}
+
+// A number as the user would write it (no trailing zeros).
+std::string vm_text(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
 }
 
 std::string frame_name(size_t i) {
@@ -74,7 +110,8 @@ int render_rank(const Args& args, MpiJob* mpi) {
       "out", po::value<std::string>()->required(), "output folder (must not exist unless --force)")(
       "scene", po::value<std::string>()->default_value(""), "scene folder (default: the run's)")(
       "camera", po::value<int>()->default_value(0), "camera of frame I of the scene (held-out frames count) to render from")(
-      "pose", po::value<std::string>(), "12 numbers: a camera-to-world 3x4 matrix (scene coordinates) instead of --camera")(
+      "pose", po::value<std::vector<std::string>>()->multitoken(),
+      "12 numbers (spaces or commas): a camera-to-world 3x4 matrix, row-major, in scene coordinates, instead of --camera")(
       "time", po::value<double>(), "object time in [-1, 1] (frame i of N has 2i/N - 1); default: every frame's time")(
       "compose", po::value<std::string>(), "composition spec: render each of its targets (see docs/rendering.md)")(
       "video", po::bool_switch(), "also write video.mp4 of the colour frames")(
@@ -85,6 +122,22 @@ int render_rank(const Args& args, MpiJob* mpi) {
   po::variables_map vm;
   if (!parse(args, desc, vm, "usage: nova render --run RUN --out DIR [--camera I | --pose M] [--time T] [--compose SPEC] [--video]"))
     return 0;
+  // Everything the options alone decide is refused before any work.
+  check_output_location(vm["out"].as<std::string>(), "--out");
+  const bool video = vm["video"].as<bool>();
+  if (vm.count("compose")) {
+    for (const char* o : {"camera", "pose", "time"})
+      if (vm.count(o) && !vm[o].defaulted())
+        throw Error("--" + std::string(o) + " does not apply to --compose (each target names its camera and times)");
+  }
+  if (vm.count("pose") && !vm["camera"].defaulted()) throw Error("--camera and --pose both give the camera: pass one");
+  if (!vm["fps"].defaulted() && !video) throw Error("--fps sets the video's frame rate: it needs --video");
+  const double fps = vm["fps"].as<double>();
+  if (video && !(std::isfinite(fps) && fps > 0)) throw Error("--fps " + vm_text(fps) + ": the frame rate must be positive");
+  if (vm.count("time")) {
+    const double t = vm["time"].as<double>();
+    if (!(t >= -1.0 && t <= 1.0)) throw Error("--time " + vm_text(t) + " is outside [-1, 1]");
+  }
   const auto t0 = std::chrono::steady_clock::now();
   OpenRun run = open_run(vm["run"].as<std::string>(), vm["scene"].as<std::string>(), false);
   const Scene& scene = run.scene;
@@ -113,7 +166,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
   if (cam < 0 || cam >= static_cast<int>(all_frames.size()))
     throw Error("--camera " + std::to_string(cam) + ": the scene has frames " + frame_range);
   Camera camera = all_frames[static_cast<size_t>(cam)].camera;
-  if (vm.count("pose")) camera = parse_pose(vm["pose"].as<std::string>(), camera);
+  if (vm.count("pose")) camera = parse_pose(vm["pose"].as<std::vector<std::string>>(), camera);
 
   const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   Runtime rt(device, false);
@@ -152,9 +205,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
   } else {
     std::vector<double> times;
     if (vm.count("time")) {
-      const double t = vm["time"].as<double>();
-      if (!std::isfinite(t) || t < -1.0 || t > 1.0) throw Error("--time " + std::to_string(t) + " is outside [-1, 1]");
-      times.push_back(t);
+      times.push_back(vm["time"].as<double>());
     } else {
       for (const FolderFrame& f : all_frames) times.push_back(f.time);
     }
@@ -166,10 +217,9 @@ int render_rank(const Args& args, MpiJob* mpi) {
       req.instances = scene_instances(scene.num_objects, times[i]);
       progress.start("view " + std::to_string(i + 1) + "/" + std::to_string(times.size()));
       frames.push_back(write_view(renderer.render(req), staging, frame_name(i).substr(0, 3), masks));
-      if (lead) std::cerr << "\rrendered " << i + 1 << "/" << times.size() << std::flush;
+      if (lead) count_progress("rendered", i + 1, times.size());
       ++views;
     }
-    if (lead) std::cerr << "\n";
     if (mpi) {  // every frame on disk; rank 0 takes them back in order for the video
       mpi->barrier();
       views = times.size();
@@ -180,7 +230,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
     }
   }
   if (!lead) return 0;
-  if (vm["video"].as<bool>()) write_video(frames, staging + "/video.mp4", vm["fps"].as<double>());
+  if (video) write_video(frames, staging + "/video.mp4", fps);
   staged->commit();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << "rendered " << views << " view(s) into " << vm["out"].as<std::string>() << " in " << secs << " s\n";

@@ -28,8 +28,9 @@ class RenderProgress {
     printed_ = true;
     const double rate = secs > 0 ? static_cast<double>(done) / secs : 0.0;
     const double eta = rate > 0 ? static_cast<double>(total - done) / rate : 0.0;
-    std::fprintf(stderr, "\r%s: rays %zu/%zu  %.0f rays/s  %s  eta %s%s", view_.c_str(), done, total, rate,
-                 clock_text(secs).c_str(), clock_text(eta).c_str(), last ? "\n" : "");
+    const bool tty = stderr_is_terminal();
+    std::fprintf(stderr, "%s%s: rays %zu/%zu  %.0f rays/s  %s  eta %s%s", tty ? "\r" : "", view_.c_str(), done, total,
+                 rate, clock_text(secs).c_str(), clock_text(eta).c_str(), last || !tty ? "\n" : "");
     std::fflush(stderr);
   }
 

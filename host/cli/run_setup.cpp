@@ -1,6 +1,7 @@
 #include "cli/run_setup.hpp"
 
 #include <filesystem>
+#include <unistd.h>
 
 #include "nova/error.hpp"
 
@@ -12,9 +13,26 @@ OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool 
   OpenRun r{RunFolder(run_dir).read(), {}, {}};
   const std::string dir = scene_dir.empty() ? r.files.scene : scene_dir;
   if (dir.empty()) throw Error("run '" + run_dir + "' does not name its scene: pass --scene");
+  if (scene_dir.empty() && !fs::is_directory(dir))
+    throw Error("the scene '" + dir + "' named in '" + RunFolder(run_dir).config_path() +
+                "' is not a folder (moved, or a relative path from another folder): pass --scene");
   r.scene = load_training_scene(dir, r.files.config, load_gt, split);
   r.geometry = ray_geometry(r.scene);
   return r;
+}
+
+void check_output_location(const std::string& path, const std::string& option) {
+  if (path.empty()) throw Error(option + ": empty path");
+  std::error_code ec;
+  const fs::path full = fs::absolute(path, ec).lexically_normal();
+  if (ec) throw Error(option + " '" + path + "': " + ec.message());
+  // The nearest part of the path that exists (a file in the way reads as absent below it).
+  fs::path p = full;
+  while (!fs::exists(p, ec) && p.has_parent_path() && p.parent_path() != p) p = p.parent_path();
+  if (!fs::is_directory(p, ec))
+    throw Error(p == full ? option + " '" + path + "' is a file, not a folder"
+                          : option + " '" + path + "': '" + p.string() + "' is not a folder");
+  if (::access(p.c_str(), W_OK) != 0) throw Error(option + " '" + path + "': '" + p.string() + "' is not writable");
 }
 
 std::string StagedFolder::staging_path(std::string dir) {

@@ -22,6 +22,10 @@ struct OpenRun {
 OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool load_gt,
                  const std::string& split = "train");
 
+// Error naming `option` unless `path` can be created: its nearest existing ancestor must be a
+// writable folder. Checked before any work, so that a bad --out costs nothing.
+void check_output_location(const std::string& path, const std::string& option);
+
 // Writes into `dir` through a staging folder renamed at the end, so that a failure leaves
 // no partial output. `dir` must not exist unless `replace`.
 class StagedFolder {

@@ -3,6 +3,8 @@
 #include <iostream>
 
 #include "cli/options.hpp"
+#include "cli/run_setup.hpp"
+#include "nova/error.hpp"
 #include "nova/io/synth.hpp"
 
 namespace nova::cli {
@@ -15,16 +17,19 @@ int synth(const Args& args) {
       "tiny (tests: 10 frames, 64x48) | default (demo: 24 frames, 160x120) | family (the "
       "seed draws a whole scene: 1-3 objects, shapes, motion, camera path, size, "
       "imperfect training inputs)")(
-      "seed", po::value<uint32_t>()->default_value(0), "seed: same seed, same bytes")(
+      "seed", po::value<long long>()->default_value(0), "seed in [0, 4294967295]: same seed, same bytes")(
       "force", po::bool_switch(), "replace an existing output folder");
   po::variables_map vm;
   if (!parse(args, desc, vm,
              "usage: nova synth --out DIR [--preset tiny|default|family] [--seed S] [--force]"))
     return 0;
+  const long long seed = vm["seed"].as<long long>();
+  if (seed < 0 || seed > 4294967295LL) throw Error("--seed " + std::to_string(seed) + " is outside [0, 4294967295]");
+  check_output_location(vm["out"].as<std::string>(), "--out");
   const auto t0 = std::chrono::steady_clock::now();
   const std::string report =
       write_synthetic_scene(vm["out"].as<std::string>(), vm["preset"].as<std::string>(),
-                            vm["seed"].as<uint32_t>(), vm["force"].as<bool>());
+                            static_cast<uint32_t>(seed), vm["force"].as<bool>());
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << report << " in " << secs << " s\n";
   return 0;

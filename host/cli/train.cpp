@@ -29,7 +29,7 @@ int train_rank(const Args& args, MpiJob* mpi) {
   const bool lead = !mpi || mpi->rank() == 0;  // rank 0 prints and writes the run folder
   po::options_description desc("nova train options");
   add_common_options(desc);
-  desc.add_options()("scene", po::value<std::string>()->required(), "scene folder (nova synth, NOVA/DynamicNeRF, LLFF, Blender)")(
+  desc.add_options()("scene", po::value<std::string>(), "scene folder (nova synth, NOVA/DynamicNeRF, LLFF, Blender); on --resume the run's own by default")(
       "out", po::value<std::string>()->required(), "run folder (config.ini, metrics.jsonl, checkpoint.bin)")(
       "config", po::value<std::string>(), "config file of key = value lines (a run's config.ini works)")(
       "resume", po::bool_switch(), "continue the run in --out from its checkpoint")(
@@ -43,9 +43,11 @@ int train_rank(const Args& args, MpiJob* mpi) {
   }
   desc.add(table);
   po::variables_map vm;
-  if (!parse(args, desc, vm, "usage: nova train --scene DIR --out RUN [--config FILE] [--resume] [--OPTION VALUE ...]"))
+  if (!parse(args, desc, vm, "usage: nova train --scene DIR --out RUN [--config FILE] [--OPTION VALUE ...]\n"
+             "       nova train --out RUN --resume [--scene DIR] [--config FILE] [--OPTION VALUE ...]"))
     return 0;
   const std::string out = vm["out"].as<std::string>();
+  check_output_location(out, "--out");
   const RunFolder run(out);
   const bool resume = vm["resume"].as<bool>();
 
@@ -78,7 +80,16 @@ int train_rank(const Args& args, MpiJob* mpi) {
     mpi->barrier();  // every rank has checked the folder before rank 0 fills it
   }
 
-  Scene scene = load_training_scene(vm["scene"].as<std::string>(), config);
+  std::string scene_dir = vm.count("scene") ? vm["scene"].as<std::string>() : "";
+  if (scene_dir.empty() && resume) {
+    scene_dir = run.read().scene;
+    if (scene_dir.empty()) throw Error("--resume: '" + run.config_path() + "' names no scene: pass --scene");
+    if (!fs::is_directory(scene_dir))
+      throw Error("--resume: the scene '" + scene_dir + "' named in '" + run.config_path() +
+                  "' is not a folder: pass --scene");
+  }
+  if (scene_dir.empty()) throw Error("--scene is required (a scene folder to train on)");
+  Scene scene = load_training_scene(scene_dir, config);
   const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   const bool profile = vm["profile"].as<bool>();
   Runtime rt(device, profile);

@@ -71,7 +71,7 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
     if (img.extension().empty()) img += ".png";
     f.name = img.lexically_normal().string();
     f.rgb = read_rgb(img.string(), opt.white_background);
-    if (factor > 1) f.rgb = resize_area(f.rgb, f.rgb.width / factor, f.rgb.height / factor);
+    f.rgb = downscale_by(f.rgb, factor, img.string());
     if (index == 0) {
       w = f.rgb.width;
       h = f.rgb.height;

@@ -231,10 +231,7 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
     Frame f;
     f.name = files[i].filename().string();
     f.rgb = read_rgb(files[i].string());
-    if (resize) {
-      const int tw = f.rgb.width / factor, th = f.rgb.height / factor;
-      f.rgb = resize_area(f.rgb, tw, th);
-    }
+    if (resize) f.rgb = downscale_by(f.rgb, factor, files[i].string());
     if (i == 0) {
       w = f.rgb.width;
       h = f.rgb.height;
@@ -305,8 +302,11 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
       if (a.shape.size() != 2 && !(a.shape.size() == 3 && a.shape[2] == 1))
         throw Error(dfiles[i].string() + ": disparity must be 2-D (H, W), has " +
                     std::to_string(a.shape.size()) + " dimensions");
-      for (double v : a.values)
-        if (!std::isfinite(v)) throw Error(dfiles[i].string() + ": non-finite disparity value");
+      const size_t cols = a.shape[1];
+      for (size_t k = 0; k < a.values.size(); ++k)
+        if (!std::isfinite(a.values[k]))
+          throw Error(dfiles[i].string() + ": non-finite disparity " + std::to_string(a.values[k]) + " at row " +
+                      std::to_string(k / cols) + ", column " + std::to_string(k % cols));
       ImageF d;
       d.height = int(a.shape[0]);
       d.width = int(a.shape[1]);

@@ -48,7 +48,7 @@ std::string scene_summary(const Scene& s) {
     << ", focal " << c.fx << ", principal point (" << c.cx << ", " << c.cy << ")\n";
   o << "  time        " << (s.has_time ? "" : "(static) ") << "[" << s.frames.front().time << ", "
     << s.frames.back().time << "]\n";
-  o << "  NeRFs       " << s.num_nerfs() << " (1 static + " << s.num_objects << " objects)\n";
+  o << "  NeRFs       " << s.num_nerfs() << " (1 static + " << s.num_objects << (s.num_objects == 1 ? " object)\n" : " objects)\n");
   o << "  mask cover ";
   for (int k = 0; k < s.num_nerfs(); ++k) {
     double sum = 0, n = 0;

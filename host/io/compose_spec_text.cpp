@@ -137,6 +137,9 @@ ComposeSpec parse_compose_spec(const std::string& text, const std::string& origi
           have_object = true;
         } else if (k == "time") {
           inst.time = parse_number(v, origin, line, k);
+          // The range nova render's --time takes: the object NeRFs know no other times.
+          if (!(inst.time >= -1.0 && inst.time <= 1.0))
+            fail(origin, line, "time must be in [-1, 1] (frame i of N has 2i/N - 1), got " + v);
           have_time = true;
         } else if (k == "rotate") {
           inst.rotate_deg = parse_triple(v, origin, line, k);

@@ -4,6 +4,7 @@
 // partially).
 #include "nova/io/image_io.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <opencv2/imgproc.hpp>
@@ -133,6 +134,16 @@ Image8 resize_area(const Image8& image, int width, int height) {
   cv::Mat out;
   cv::resize(to_mat(image), out, cv::Size(width, height), 0, 0, cv::INTER_AREA);
   return from_mat(out);
+}
+
+Image8 downscale_by(const Image8& image, int factor, const std::string& name) {
+  if (factor <= 1) return image;
+  const int w = image.width / factor, h = image.height / factor;
+  if (w < 1 || h < 1)
+    throw Error(name + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                " downscaled by --factor " + std::to_string(factor) + " leaves no pixels (at most --factor " +
+                std::to_string(std::min(image.width, image.height)) + ")");
+  return resize_area(image, w, h);
 }
 
 Image8 resize_nearest(const Image8& image, int width, int height) {

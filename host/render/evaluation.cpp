@@ -52,7 +52,14 @@ std::vector<GroundTruthView> split_views(Scene& split_scene, const std::string& 
     Frame& f = split_scene.frames[i];
     char name[32];
     std::snprintf(name, sizeof name, "%s_%03zu", split.c_str(), i);
-    views.push_back({name, split, static_cast<int>(i), f.time, f.camera, std::move(f.rgb)});
+    GroundTruthView v;
+    v.name = name;
+    v.kind = split;
+    v.time_index = static_cast<int>(i);
+    v.time = f.time;
+    v.camera = f.camera;
+    v.rgb = std::move(f.rgb);
+    views.push_back(std::move(v));
   }
   return views;
 }

@@ -100,9 +100,19 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
     for (const Frame& f : scene.frames) times.push_back(f.time);
     occupancy_->enable_updates(rt_, config_.field, geometry_, times, {config_.occupancy_warmup, config_.occupancy_every});
   }
-  if (writes_files())
-    write_text_atomic(run_.config_path(),
-                      format_config(config_, {"# the scene this run trained on", "scene = " + scene.source}));
+}
+
+// Written when training starts or a resume has been accepted, never before: a --resume the
+// checkpoint refuses leaves the run's config.ini as it was. The scene's path is absolute so
+// that nova eval and nova render find it from any folder.
+void Trainer::write_config() {
+  if (config_written_ || !writes_files()) return;
+  std::error_code ec;
+  const fs::path scene = fs::absolute(scene_.source, ec).lexically_normal();
+  write_text_atomic(run_.config_path(),
+                    format_config(config_, {"# the scene this run trained on",
+                                            "scene = " + (ec ? scene_.source : scene.string())}));
+  config_written_ = true;
 }
 
 RaySlice Trainer::ray_slice() const {
@@ -317,6 +327,7 @@ void Trainer::run(const std::function<void(const TrainProgress&)>& progress, lon
   auto window_start = start;
   long window_steps = 0;
   double pretrain_step_s = 0, joint_step_s = 0;  // recent seconds per step, for the ETA
+  write_config();
   std::ofstream metrics;
   if (writes_files()) {
     metrics.open(run_.metrics_path(), std::ios::app);
@@ -417,6 +428,7 @@ void Trainer::resume() {
     }
   }
   if (writes_files()) truncate_metrics(run_.metrics_path(), step_);
+  write_config();
 }
 
 }  // namespace nova

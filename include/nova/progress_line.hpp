@@ -2,6 +2,7 @@
 // The one-line training progress report `nova train` prints (and nova-bench accuracy with it).
 #include <cstdio>
 #include <string>
+#include <unistd.h>
 
 #include "nova/trainer.hpp"
 
@@ -16,6 +17,26 @@ inline std::string clock_text(double s) {
   else
     std::snprintf(buf, sizeof buf, "%ldm%02lds", t / 60, t % 60);
   return buf;
+}
+
+// Whether stderr is a terminal: progress there redraws one line ('\r'); in a log it is
+// written as whole lines.
+inline bool stderr_is_terminal() {
+  static const bool tty = ::isatty(::fileno(stderr)) != 0;
+  return tty;
+}
+
+// "WHAT DONE/TOTAL" on stderr after each of TOTAL items: redrawn in place on a terminal, in a
+// log one line per tenth of the work.
+inline void count_progress(const std::string& what, size_t done, size_t total) {
+  if (stderr_is_terminal()) {
+    std::fprintf(stderr, "\r%s %zu/%zu%s", what.c_str(), done, total, done >= total ? "\n" : "");
+  } else {
+    const size_t every = total >= 10 ? total / 10 : 1;
+    if (done % every != 0 && done < total) return;
+    std::fprintf(stderr, "%s %zu/%zu\n", what.c_str(), done, total);
+  }
+  std::fflush(stderr);
 }
 
 // "step N/TOTAL  PHASE loss ...  psnr ... dB  lr ...  R rays/s  ELAPSED  eta ETA[  mlp on P% of samples]",

@@ -47,7 +47,8 @@ class Trainer {
   ~Trainer();
 
   // Restores RUN/checkpoint.bin: Error when it is missing, corrupt, or written for other
-  // networks or another number of objects.
+  // networks or another number of objects. RUN/config.ini is rewritten (this configuration)
+  // only once the checkpoint is accepted, else by run().
   void resume();
   // Trains up to `until_step` (the configuration's total when < 0), logging every
   // log_every steps and checkpointing every checkpoint_every steps and at the end.
@@ -76,6 +77,7 @@ class Trainer {
   void ensure_phase();
   void train_step(bool log, TrainProgress& p);
   void write_checkpoint_now();
+  void write_config();
   void maybe_update_occupancy(long phase_step);
 
   Runtime& rt_;
@@ -90,6 +92,7 @@ class Trainer {
   std::unique_ptr<Adam> adam_;
   bool graph_joint_ = false;
   bool profile_ = false;
+  bool config_written_ = false;
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
   // Empty-space skipping (config_.occupancy): the grids of the static and object NeRFs.
   std::unique_ptr<OccupancyEstimator> occupancy_;  // with TrainConfig::occupancy

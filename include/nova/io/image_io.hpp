@@ -22,6 +22,9 @@ void write_png(const std::string& path, const Image8& image);
 // Area downscaling (for a downscale factor) and nearest-neighbour resizing (for masks and
 // disparity, as the reference code does).
 Image8 resize_area(const Image8& image, int width, int height);
+// `image` (read from `name`) downscaled by `factor` (area): Error naming the file when the
+// factor leaves no pixel.
+Image8 downscale_by(const Image8& image, int factor, const std::string& name);
 Image8 resize_nearest(const Image8& image, int width, int height);
 ImageF resize_nearest(const ImageF& image, int width, int height);
 
