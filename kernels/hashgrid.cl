@@ -60,8 +60,9 @@ inline void hg_cells(__global const float* p, float4 inv_bound, float res, float
                      uint* cell, float* frac) {
   const float inv[4] = {inv_bound.x, inv_bound.y, inv_bound.z, inv_bound.w};
   for (uint d = 0; d < HG_DIMS; ++d) {
-    const int is_t = HG_DIMS == 4 && d == 3;
-    hg_cell(p[d], inv[d], is_t ? res_t : res, HG_EXTEND && !dense && !is_t, &cell[d], &frac[d]);
+    const int is_t = (HG_DIMS == 4) ? (d == 3) : 0;
+    const int extend = HG_EXTEND ? ((dense | is_t) == 0) : 0;  // neither a dense level nor time
+    hg_cell(p[d], inv[d], is_t ? res_t : res, extend, &cell[d], &frac[d]);
   }
 }
 
