@@ -201,6 +201,7 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
   expect("render --run " + out + " --out " + (dir / "r").string() + " --compose " + (dir / "late.txt").string(),
          "time must be in [-1, 1]");
   expect("eval --run " + out + " --views cam0 --split test", "--views and --split");
+  expect("eval --run " + out + " --split test", "has no splits");
   // An --out below a file is refused before any work, for every command that writes one.
   write_all(dir / "afile", "x");
   const std::string below = (dir / "afile" / "x").string();
@@ -211,6 +212,23 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
   expect("train --scene " + scene + " --out " + (dir / "f").string() + " --factor 64" + kTiny, "--factor 64");
   BOOST_TEST(!fs::exists(dir / "f"));
   BOOST_TEST(!fs::exists(dir / "s"));
+  expect("train --scene " + scene + " --out " + (dir / "h").string() + " --holdout 1" + kTiny, "to train on");
+  BOOST_TEST(!fs::exists(dir / "h"));
+  // A NOVA-layout folder without motion_masks/: refused with the way out, which works and
+  // which render then reads back from config.ini.
+  const fs::path unmasked = dir / "unmasked";
+  fs::copy(scene, unmasked, fs::copy_options::recursive);
+  fs::remove_all(unmasked / "motion_masks");
+  expect("train --scene " + unmasked.string() + " --out " + (dir / "u").string() + kTiny, "--static-only true");
+  BOOST_TEST(!fs::exists(dir / "u"));
+  Result u = nova_cli("train --scene " + unmasked.string() + " --out " + (dir / "u").string() + kTiny +
+                          " --static-only true", dir);
+  BOOST_TEST(u.code == 0, u.err);
+  BOOST_TEST(read_all(dir / "u" / "config.ini").find("\nstatic-only = true\n") != std::string::npos);
+  Result ur = nova_cli("render --run " + (dir / "u").string() + " --out " + (dir / "ur").string() + " --time 0", dir);
+  BOOST_TEST(ur.code == 0, ur.err);
+  BOOST_TEST(fs::exists(dir / "ur" / "000_mask0.png"));
+  BOOST_TEST(!fs::exists(dir / "ur" / "000_mask1.png"));  // one NeRF: the static one
   expect("render --run " + (dir / "norun").string() + " --out " + (dir / "r").string(), "norun");
   expect("eval --run " + out + " --views sideways", "sideways");
   // A damaged checkpoint is named as such.

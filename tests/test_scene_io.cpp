@@ -236,6 +236,23 @@ BOOST_AUTO_TEST_CASE(held_out_frames_keep_the_time_axis) {
   }
   held.frames.resize(1);
   BOOST_CHECK_THROW(hold_out_frames(held, 2), Error);
+  // Holding out every frame (1), or all but one (2 of 3 frames), leaves nothing to train on.
+  for (auto [frames, every] : {std::pair{5, 1}, std::pair{3, 2}}) {
+    Scene few;
+    few.name = "few";
+    few.frames.resize(static_cast<size_t>(frames));
+    try {
+      hold_out_frames(few, every);
+      BOOST_ERROR("holdout " << every << " of " << frames << " frames was accepted");
+    } catch (const Error& e) {
+      BOOST_TEST(std::string(e.what()).find("to train on") != std::string::npos, e.what());
+      BOOST_TEST(e.exit_code() == kExitUsage);
+    }
+  }
+  Scene four;
+  four.frames.resize(4);
+  hold_out_frames(four, 2);  // frames 1 and 3 remain: enough
+  BOOST_TEST(four.frames.size() == 2u);
 }
 
 // A held-out frame keeps where its objects are (the largest object mask per pixel), so

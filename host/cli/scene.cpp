@@ -18,7 +18,7 @@ int scene(const Args& args) {
       "static-only", po::bool_switch(), "load a scene without motion masks as static-only (K = 0)")(
       "split", po::value<std::string>()->default_value("train"), "Blender: transforms_<split>.json; npz: train, val or test");
   po::variables_map vm;
-  if (!parse(args, desc, vm, "usage: nova scene --scene DIR [--factor F] [--static-only]"))
+  if (!parse(args, desc, vm, "usage: nova scene --scene DIR [--factor F] [--static-only] [--format auto|nova|llff|blender|npz] [--split S]"))
     return 0;
   LoadOptions opt;
   opt.format = vm["format"].as<std::string>();

@@ -203,6 +203,10 @@ void read_ground_truth(const path& dir, Scene& scene, const WorldTransform& worl
 
 Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
   if (!fs::is_directory(dir)) throw Error(dir.string() + ": not a folder");
+  if (opt.split != "train")
+    throw Error("--split " + opt.split + ": " + dir.string() + " is " + (nova ? "a NOVA" : "an LLFF") +
+                " folder, which has no splits (hold frames out with --holdout and score them with "
+                "nova eval --views heldout)");
   Scene scene;
   scene.name = fs::absolute(dir).lexically_normal().filename().string();
   if (scene.name.empty()) scene.name = fs::absolute(dir).lexically_normal().parent_path().filename().string();
@@ -277,8 +281,8 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
     }
   } else if (nova && !opt.static_only) {
     throw Error(mask_dir.string() + ": missing; NOVA needs one mask folder per NeRF "
-                "(motion_masks/0 = background, 1..K = objects). Pass --static-only to load "
-                "the scene as static-only (K = 0)");
+                "(motion_masks/0 = background, 1..K = objects). To load it as static-only "
+                "(K = 0): nova train --static-only true, nova scene --static-only");
   } else {
     if (nova && fs::is_directory(mask_dir))
       scene.notes.push_back("motion_masks/ present but ignored (--static-only)");

@@ -14,6 +14,7 @@ namespace nova {
 Scene load_training_scene(const std::string& dir, const TrainConfig& config, bool load_gt, const std::string& split) {
   LoadOptions o;
   o.factor = config.factor;
+  o.static_only = config.static_only;
   o.load_gt = load_gt;
   o.split = split;
   Scene s = load_scene(dir, o);

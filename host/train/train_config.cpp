@@ -249,6 +249,8 @@ std::vector<ConfigOption> make_options() {
                          [](TrainConfig& c) -> int& { return c.factor; }));
   o.push_back(int_option("holdout", "hold every n-th frame out of training for evaluation (0: none)", 0, 1000000,
                          [](TrainConfig& c) -> int& { return c.holdout; }));
+  o.push_back(bool_option("static-only", "load a NOVA-layout scene that has no motion_masks/ as static-only (no object NeRFs)",
+                          [](TrainConfig& c) -> bool& { return c.static_only; }));
   o.push_back(int_option("seed", "seed of the initial weights, pixel batches, jitter and augmentation", 0, 4294967295L,
                          [](TrainConfig& c) -> unsigned& { return c.seed; }));
   o.push_back(int_option("checkpoint-every", "steps between checkpoints (one is always written at the end)", 1, kBig,

@@ -63,6 +63,7 @@ struct TrainConfig : ModelConfig {
   // Scene loading.
   int factor = 0;   // image downscale (0: the reader's default)
   int holdout = 0;  // every n-th frame is held out for evaluation (0: none; LLFF uses 8)
+  bool static_only = false;  // a NOVA-layout folder without motion_masks/ loads with K = 0
   // Run.
   unsigned seed = 1;
   int checkpoint_every = 1000;
