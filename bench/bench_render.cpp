@@ -142,7 +142,13 @@ int render(const Args& args) {
   const Options o(args, {{"rays", "65536"}, {"samples", "64"}, {"objects", "0,1,3"},
                          {"repeats", "3"}, {"device", ""}});
   if (o.help()) {
-    std::cout << o.usage("nova-bench render");
+    std::cout << o.usage("nova-bench render")
+              << "\nSamples/s of the compositing op (render_composite), forward and backward, beside a\n"
+                 "single-threaded C++ loop of the same maths in the same run; prints a table, then its CSV.\n\n"
+                 "--rays, --samples: the batch composited (rays x samples per ray)\n"
+                 "--objects: comma list of object NeRF counts K (1 + K NeRFs each)\n"
+                 "--repeats: timed repetitions per measurement (the median is reported)\n"
+                 "--device: OpenCL device, as nova's --device\n";
     return 0;
   }
   const size_t R = static_cast<size_t>(o.integer("rays")), S = static_cast<size_t>(o.integer("samples"));

@@ -206,7 +206,17 @@ int step(const Args& args) {
                          {"warmup", "2"}, {"profile-steps", "2"}, {"factor", "1"}, {"device", ""},
                          {"out", ""}, {"run", ""}, {"torch", "auto"}});
   if (o.help()) {
-    std::cout << o.usage("nova-bench step") << "\n--objects: numbers of object NeRFs K (the scene's first K)\n"
+    std::cout << o.usage("nova-bench step")
+              << "\nSeconds per training step (occupancy skipping off: the dense step), device memory and peak\n"
+                 "RSS, per preset and phase, then a per-op profile.\n\n"
+                 "--scene: the scene folder to step on (required unless --run)\n"
+                 "--presets: comma list of presets (quick, reference)\n"
+                 "--objects: numbers of object NeRFs K (the scene's first K)\n"
+                 "--steps, --warmup: timed steps, and untimed steps before them (kernel builds)\n"
+                 "--profile-steps: steps of the per-op profile (0: none)\n"
+                 "--factor: image downscale factor of the scene\n"
+                 "--out: also write the table as CSV here\n"
+                 "--device: OpenCL device, as nova's --device\n"
               << "--run RUN: continue a trained run instead (its config, weights, grids and phase; --scene\n"
                  "  defaults to the run's scene; --presets, --objects and --factor do not apply)\n"
               << "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path: each row's\n"

@@ -394,7 +394,10 @@ int tradeoff(const Args& raw_args) {
   {
     const std::string cache = gemm_tuning_cache_path();
     head << "GEMM tuning cache (gemm=tuned): " << (cache.empty() ? "none" : cache)
-         << (!cache.empty() && fs::exists(cache) ? "" : " (missing: tuned runs the table's CLBlast; run nova tune first)")
+         << (!cache.empty() && fs::exists(cache)
+                 ? ""
+                 : host_gemm_available(device) ? " (missing: tuned runs the host BLAS " + host_blas_library() + ")"
+                                               : std::string(" (missing: tuned runs the table's CLBlast; run nova tune first)"))
          << "\n";
   }
   std::cout << head.str();

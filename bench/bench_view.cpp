@@ -202,7 +202,8 @@ int view(const Args& args) {
       const double o = ratio - 1, late = static_cast<double>(s.late) / static_cast<double>(s.evaluated);
       even << s.name << ": passes cost " << std::fixed << std::setprecision(3) << o << " of the time without them, "
            << late << " of the evaluations come after the first check: break-even at "
-           << (late > 0 && o < 1 ? o / ((1 - o) * late) : 1.0) << " of the rays stopped (pays_from "
+           // o < 0: the passes measured faster than none (noise), so stopping pays from any fraction
+           << (late > 0 && o < 1 ? std::max(0.0, o / ((1 - o) * late)) : 1.0) << " of the rays stopped (pays_from "
            << EarlyTermination{}.pays_from << ")\n" << std::defaultfloat;
     }
   }

@@ -342,6 +342,13 @@ BOOST_AUTO_TEST_CASE(bad_blender_json) {
   expect("{\"camera_angle_x\": 0.69, \"frames\": [" + frame + ", " +
              R"({"file_path": "./train/r_0", "time": 0.5, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]})" + "]}",
          {json, "only 1 of 2 frames have a time"});
+  expect("{\"camera_angle_x\": 0.69, \"frames\": [" +
+             std::string(R"({"file_path": "./train/r_0", "time": "abc", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]})") + "]}",
+         {json + ": frame 0: time \"abc\" is not a number"});
+  write_png((dir / "train" / "r_1.png").string(), Image8(10, 6, 3, 100));
+  expect("{\"camera_angle_x\": 0.69, \"frames\": [" + frame + ", " +
+             R"({"file_path": "./train/r_1", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]]})" + "]}",
+         {"r_1.png: size 10x6 differs from the first frame's 8x6"});
 }
 
 // A mask of another aspect ratio (another video's, or a crop: here a third of the width) is
@@ -367,6 +374,17 @@ BOOST_AUTO_TEST_CASE(bad_mask_aspect_ratio) {
   const Scene s = load_scene(dir.string());
   BOOST_TEST(s.frames[3].masks[1].width == m.width);
   BOOST_TEST((s.frames[3].masks[1].data == m.data));  // nearest-neighbour halving of a doubled mask
+  const auto noted = [&](const Scene& sc, const std::string& part) {
+    return std::any_of(sc.notes.begin(), sc.notes.end(), [&](const std::string& n) { return n.find(part) != std::string::npos; });
+  };
+  BOOST_TEST(noted(s, "motion_masks/1/: 1 mask(s) at " + std::to_string(twice.width) + "x" + std::to_string(twice.height)));
+  BOOST_TEST(!noted(s, "motion_masks/2/"));  // its masks are at the frames' size
+  BOOST_TEST(!noted(s, "warning"));
+
+  // An object whose masks are empty in every frame is loaded with a warning.
+  for (const auto& f : fs::directory_iterator(dir / "motion_masks" / "2"))
+    write_png(f.path().string(), Image8(m.width, m.height, 1, 0));
+  BOOST_TEST(noted(load_scene(dir.string()), "warning: object 2's masks are empty in every frame"));
 }
 
 BOOST_AUTO_TEST_CASE(bad_extra_frame) {

@@ -90,6 +90,9 @@ int train_rank(const Args& args, MpiJob* mpi) {
   }
   if (scene_dir.empty()) throw Error("--scene is required (a scene folder to train on)");
   Scene scene = load_training_scene(scene_dir, config);
+  if (lead)
+    for (const std::string& note : scene.notes)
+      if (note.rfind("warning: ", 0) == 0) std::cerr << "nova train: " << note << "\n";
   const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   const bool profile = vm["profile"].as<bool>();
   Runtime rt(device, profile);

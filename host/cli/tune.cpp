@@ -186,6 +186,9 @@ int tune(const Args& args) {
   std::cout << "(GFLOP/s; default = the built-in table's CLBlast; host BLAS = "
             << (kHostBlas ? "OpenBLAS, same shapes, same run" : "not built (no OpenBLAS)")
             << "); " << std::setprecision(0) << secs << " s\n";
+  if (kHostBlas && std::any_of(results.begin(), results.end(), [](const auto& r) { return r.winner >= 0 && r.config.str() == "host"; }))
+    std::cout << "(winner host: the host BLAS called on the device's buffers, as training calls it; "
+                 "tuned/host is then that path's cost against the bare call)\n";
   if (!vm["dry-run"].as<bool>()) {
     merge_gemm_cache(path, entries);
     std::cout << "wrote " << entries.size() << " winners to " << path << "\n";

@@ -76,7 +76,8 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
       w = f.rgb.width;
       h = f.rgb.height;
     } else if (f.rgb.width != w || f.rgb.height != h) {
-      throw Error(img.string() + ": size differs from the first frame's");
+      throw Error(img.string() + ": size " + std::to_string(f.rgb.width) + "x" + std::to_string(f.rgb.height) +
+                  " differs from the first frame's " + std::to_string(w) + "x" + std::to_string(h));
     }
     const auto m = fr.find("transform_matrix");
     if (m == fr.end() || !m->is_array() || m->size() != 4) throw Error(where + ": transform_matrix must be 4x4");
@@ -93,7 +94,8 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
       }
       ++r;
     }
-    if (const auto t = fr.find("time"); t != fr.end() && t->is_number()) {
+    if (const auto t = fr.find("time"); t != fr.end()) {
+      if (!t->is_number()) throw Error(where + ": time " + t->dump() + " is not a number");
       const double time = t->get<double>();
       if (!std::isfinite(time)) throw Error(where + ": time is not finite");
       f.time = 2.0 * time - 1.0;

@@ -1,6 +1,7 @@
 // Readers for poses_bounds.npy layouts: NOVA / DynamicNeRF (with masks, disparity, ground
 // truth) and plain LLFF (static). Pose processing follows the reference loader; see
 // include/nova/io/llff_poses.hpp.
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -101,14 +102,22 @@ std::string relative_name(const path& p, const path& base) {
 }
 
 // One mask folder: N PNGs resized (nearest) to the frame size.
-std::vector<Image8> read_mask_folder(const path& folder, const path& dir, size_t n, int w, int h) {
+std::vector<Image8> read_mask_folder(const path& folder, const path& dir, size_t n, int w, int h,
+                                     std::vector<std::string>& notes) {
   const auto files = data::list_files(folder, {".png"});
   if (files.size() != n)
     throw Error(folder.string() + ": " + std::to_string(files.size()) + " masks but " +
                 std::to_string(n) + " images (mask count must match the frames)");
   std::vector<Image8> masks;
+  size_t resized = 0;
+  int mw = 0, mh = 0;
   for (const auto& f : files) {
     const Image8 m = read_mask(f.string());
+    if (m.width != w || m.height != h) {
+      ++resized;
+      mw = m.width;
+      mh = m.height;
+    }
     // Another resolution of the same picture is resized, as DynamicNeRF does; another aspect
     // ratio means a mask of another video or crop, which stretching would misplace.
     const double height_at_frame_width = static_cast<double>(m.height) * w / std::max(1, m.width);
@@ -119,7 +128,10 @@ std::vector<Image8> read_mask_folder(const path& folder, const path& dir, size_t
                   "frame in resolution only");
     masks.push_back(resize_nearest(m, w, h));
   }
-  (void)dir;
+  if (resized)
+    notes.push_back(relative_name(folder, dir) + "/: " + std::to_string(resized) + " mask(s) at " + std::to_string(mw) +
+                    "x" + std::to_string(mh) + " (e.g.) resized, nearest, to the frames' " + std::to_string(w) + "x" +
+                    std::to_string(h));
   return masks;
 }
 
@@ -263,11 +275,11 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
                       std::to_string(k) + " was expected)");
       if (sub.size() < 2)
         throw Error(mask_dir.string() + ": only folder 0 (background); objects need 1..K");
-      for (const auto& [k, folder] : sub) masks.push_back(read_mask_folder(folder, dir, n, w, h));
+      for (const auto& [k, folder] : sub) masks.push_back(read_mask_folder(folder, dir, n, w, h, scene.notes));
       scene.notes.push_back("motion_masks/: folders 0.." + std::to_string(sub.size() - 1) +
                             " (0 = background)");
     } else {
-      auto moving = read_mask_folder(mask_dir, dir, n, w, h);
+      auto moving = read_mask_folder(mask_dir, dir, n, w, h, scene.notes);
       std::vector<Image8> background;
       for (const auto& m : moving) {
         Image8 b = m;
@@ -291,6 +303,14 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
     masks.push_back(std::vector<Image8>(n, Image8(w, h, 1, 255)));
   }
   scene.num_objects = int(masks.size()) - 1;
+  for (size_t k = 1; k < masks.size(); ++k) {
+    const bool empty = std::all_of(masks[k].begin(), masks[k].end(), [](const Image8& m) {
+      return std::all_of(m.data.begin(), m.data.end(), [](uint8_t v) { return v == 0; });
+    });
+    if (empty)
+      scene.notes.push_back("warning: object " + std::to_string(k) +
+                            "'s masks are empty in every frame: its NeRF has nothing to learn");
+  }
   for (size_t i = 0; i < n; ++i)
     for (auto& m : masks) scene.frames[i].masks.push_back(std::move(m[i]));
 
