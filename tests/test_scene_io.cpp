@@ -387,6 +387,25 @@ BOOST_AUTO_TEST_CASE(bad_mask_aspect_ratio) {
   BOOST_TEST(noted(load_scene(dir.string()), "warning: object 2's masks are empty in every frame"));
 }
 
+// An alpha channel in a NOVA folder's frames is dropped, and said so; the colours stay.
+BOOST_AUTO_TEST_CASE(alpha_in_frames_is_noted) {
+  TempDir tmp("alpha");
+  const fs::path dir = copy_tiny_scene(tmp);
+  const fs::path frame = dir / "images" / "002.png";
+  const Image8 rgb = read_rgb(frame.string());
+  Image8 rgba(rgb.width, rgb.height, 4);
+  for (size_t p = 0; p < size_t(rgb.width) * rgb.height; ++p) {
+    for (int c = 0; c < 3; ++c) rgba.data[p * 4 + c] = rgb.data[p * 3 + c];
+    rgba.data[p * 4 + 3] = 7;
+  }
+  write_png(frame.string(), rgba);
+  const Scene s = load_scene(dir.string());
+  BOOST_TEST((s.frames[2].rgb.data == rgb.data));
+  BOOST_TEST(std::any_of(s.notes.begin(), s.notes.end(), [](const std::string& n) {
+    return n == "images: 1 with an alpha channel, dropped (frames are opaque)";
+  }));
+}
+
 BOOST_AUTO_TEST_CASE(bad_extra_frame) {
   TempDir tmp("bad");
   const fs::path dir = copy_tiny_scene(tmp);

@@ -59,7 +59,7 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
   const auto frames = root.find("frames");
   if (frames == root.end() || !frames->is_array() || frames->empty()) throw Error(json_path.string() + ": no frames");
 
-  size_t with_time = 0, index = 0;
+  size_t with_time = 0, index = 0, with_alpha = 0;
   int w = 0, h = 0;
   for (const json& fr : *frames) {
     const std::string where = json_path.string() + ": frame " + std::to_string(index);
@@ -70,7 +70,9 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
     fs::path img = dir / file;
     if (img.extension().empty()) img += ".png";
     f.name = img.lexically_normal().string();
-    f.rgb = read_rgb(img.string(), opt.white_background);
+    bool alpha = false;
+    f.rgb = read_rgb(img.string(), opt.white_background, &alpha);
+    with_alpha += alpha;
     f.rgb = downscale_by(f.rgb, factor, img.string());
     if (index == 0) {
       w = f.rgb.width;
@@ -127,9 +129,10 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
                         (factor > 1 ? " (downscaled by " + std::to_string(factor) + ")" : ""));
   scene.notes.push_back(scene.has_time ? "time per frame: yes (D-NeRF), mapped to 2 t - 1"
                                        : "time per frame: no (static scene)");
-  scene.notes.push_back(std::string("RGBA composited on ") +
-                        (opt.white_background ? "white" : "nothing (alpha dropped)") +
-                        "; near 2, far 6; no NDC; static-only (K = 0)");
+  if (with_alpha)
+    scene.notes.push_back(std::to_string(with_alpha) + " RGBA frame(s) composited on " +
+                          (opt.white_background ? "white" : "nothing (alpha dropped)"));
+  scene.notes.push_back("near 2, far 6; no NDC; static-only (K = 0)");
   return scene;
 }
 

@@ -243,10 +243,13 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
 
   // Frames, at one size.
   int w = 0, h = 0;
+  size_t with_alpha = 0;
   for (size_t i = 0; i < n; ++i) {
     Frame f;
     f.name = files[i].filename().string();
-    f.rgb = read_rgb(files[i].string());
+    bool alpha = false;
+    f.rgb = read_rgb(files[i].string(), false, &alpha);
+    with_alpha += alpha;
     if (resize) f.rgb = downscale_by(f.rgb, factor, files[i].string());
     if (i == 0) {
       w = f.rgb.width;
@@ -261,6 +264,8 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
   scene.notes.push_back("images: " + std::to_string(n) + " from " + relative_name(img_dir, dir) + "/" +
                         (resize ? " downscaled by " + std::to_string(factor) + " (area)" : "") +
                         " at " + std::to_string(w) + "x" + std::to_string(h));
+  if (with_alpha)
+    scene.notes.push_back("images: " + std::to_string(with_alpha) + " with an alpha channel, dropped (frames are opaque)");
 
   // Masks: one folder per NeRF, or one folder with the moving region, or none.
   const path mask_dir = dir / "motion_masks";

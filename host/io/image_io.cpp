@@ -67,8 +67,9 @@ cv::Mat to_mat(const Image8& img) {
 
 }  // namespace
 
-Image8 read_rgb(const std::string& path, bool white_background) {
+Image8 read_rgb(const std::string& path, bool white_background, bool* had_alpha) {
   cv::Mat m = decode(path);
+  if (had_alpha) *had_alpha = m.channels() == 4;
   cv::Mat rgb;
   if (m.channels() == 1) {
     cv::cvtColor(m, rgb, cv::COLOR_GRAY2RGB);
@@ -121,6 +122,7 @@ Image8 read_mask(const std::string& path) {
 void write_png(const std::string& path, const Image8& image) {
   cv::Mat m = to_mat(image);
   if (image.channels == 3) cv::cvtColor(m, m, cv::COLOR_RGB2BGR);
+  if (image.channels == 4) cv::cvtColor(m, m, cv::COLOR_RGBA2BGRA);
   std::vector<unsigned char> bytes;
   if (!detail::encode_png(m, bytes, detail::image_codec())) throw Error(path + ": PNG encoding failed");
   std::ofstream out(path, std::ios::binary | std::ios::trunc);

@@ -9,7 +9,8 @@ namespace nova {
 
 // RGB (3 channels). Grey images are expanded; an alpha channel is composited over white when
 // `white_background` (Blender scenes), else dropped. 16-bit images are scaled to 8 bits.
-Image8 read_rgb(const std::string& path, bool white_background = false);
+// `had_alpha`, when given, says whether the file had an alpha channel.
+Image8 read_rgb(const std::string& path, bool white_background = false, bool* had_alpha = nullptr);
 // The alpha channel (255 when the image has none).
 Image8 read_alpha(const std::string& path);
 // Single channel: any non-zero value (after converting colour to grey) becomes 255, as the
