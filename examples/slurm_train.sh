@@ -7,8 +7,9 @@
 #   sbatch --nodes=2 --ntasks-per-node=4 --gpus-per-task=1 examples/slurm_train.sh ...
 #
 # With more than one task the ranks train data-parallel (nova built with MPI): every rank
-# takes the GPU of its node-local rank, and a requeued job must keep the same number of tasks
-# (a run resumes for the same N). `rays` must divide by the number of tasks. A checkpoint is
+# takes the GPU of its node-local rank; a requeued job with the same number of tasks resumes
+# bit for bit (with another it continues, rounding differently). `rays` must divide by the
+# number of tasks. A checkpoint is
 # written every NOVA_CHECKPOINT_EVERY steps (200): what a requeue can lose.
 #SBATCH --job-name=nova-train
 #SBATCH --ntasks=1
