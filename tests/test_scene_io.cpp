@@ -151,6 +151,13 @@ BOOST_AUTO_TEST_CASE(blender_json_with_time) {
   BOOST_TEST(s.frames[1].camera.position(0) == 1.0);
   BOOST_TEST(std::abs(s.frames[0].camera.fx - 0.5 * 8 / std::tan(0.5 * 0.6911112)) < 1e-9);
   BOOST_TEST(!s.ndc);
+  const auto noted = [](const Scene& sc, const std::string& part) {
+    return std::any_of(sc.notes.begin(), sc.notes.end(), [&](const std::string& n) { return n.find(part) != std::string::npos; });
+  };
+  BOOST_TEST(!noted(s, "RGBA"));  // plain RGB frames: nothing composited
+  // Masks beside a Blender json are not used, and the summary says so.
+  fs::create_directories(dir / "motion_masks" / "1");
+  BOOST_TEST(noted(load_scene(dir.string()), "motion_masks/ ignored"));
 }
 
 // Real scenes from a data folder beside the repository, when there is one: reported as

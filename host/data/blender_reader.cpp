@@ -133,6 +133,8 @@ Scene load_blender_scene(const std::string& dir_s, const LoadOptions& opt) {
     scene.notes.push_back(std::to_string(with_alpha) + " RGBA frame(s) composited on " +
                           (opt.white_background ? "white" : "nothing (alpha dropped)"));
   scene.notes.push_back("near 2, far 6; no NDC; static-only (K = 0)");
+  if (fs::is_directory(dir / "motion_masks"))
+    scene.notes.push_back("motion_masks/ ignored: a Blender/D-NeRF folder trains the static NeRF alone");
   return scene;
 }
 
