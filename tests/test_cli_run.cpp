@@ -213,6 +213,10 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
   BOOST_TEST(!fs::exists(dir / "f"));
   BOOST_TEST(!fs::exists(dir / "s"));
   expect("train --scene " + scene + " --out " + (dir / "h").string() + " --holdout 1" + kTiny, "to train on");
+  // Without density noise a hash grid can start dead: allowed, with a warning.
+  Result quiet = nova_cli("train --scene " + scene + " --out " + (dir / "nz").string() + kTiny + " --noise-std 0", dir);
+  BOOST_TEST(quiet.code == 0, quiet.err);
+  BOOST_TEST(quiet.err.find("warning: --noise-std 0 with the hash-grid encoding") != std::string::npos, quiet.err);
   BOOST_TEST(!fs::exists(dir / "h"));
   // A NOVA-layout folder without motion_masks/: refused with the way out, which works and
   // which render then reads back from config.ini.

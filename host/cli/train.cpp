@@ -90,9 +90,15 @@ int train_rank(const Args& args, MpiJob* mpi) {
   }
   if (scene_dir.empty()) throw Error("--scene is required (a scene folder to train on)");
   Scene scene = load_training_scene(scene_dir, config);
-  if (lead)
+  if (lead) {
     for (const std::string& note : scene.notes)
       if (note.rfind("warning: ", 0) == 0) std::cerr << "nova train: " << note << "\n";
+    // A hash grid starts with near-zero features, so every sample's density is one constant;
+    // negative and without noise, ReLU passes no gradient (docs/known-issues.md).
+    if (config.noise_std == 0.0f && config.field.encoding == Encoding::HashGrid)
+      std::cerr << "nova train: warning: --noise-std 0 with the hash-grid encoding can start with zero density "
+                   "everywhere and learn nothing (training PSNR flat from the first step); keep some noise\n";
+  }
   const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   const bool profile = vm["profile"].as<bool>();
   Runtime rt(device, profile);
