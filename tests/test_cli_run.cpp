@@ -114,12 +114,13 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   BOOST_TEST(more.err.find("resumed at step 9") != std::string::npos);
   BOOST_TEST(read_all(dir / "run" / "config.ini").find("\nsteps = 9\n") != std::string::npos);
 
-  // A pose as 12 numbers with commas, or as separate words.
+  // A pose as 12 numbers with commas, or as separate words (negative ones too, which the
+  // option parser would otherwise take for options).
   Result pc = nova_cli("render --run " + run + " --out " + (dir / "pose_commas").string() +
-                           " --time 0 --no-masks --pose '1,0,0,0,0,1,0,0,0,0,1,0'", dir);
+                           " --time 0 --no-masks --pose 1,0,0,0,0,-1,0,0,0,0,-1,-0.5", dir);
   BOOST_TEST(pc.code == 0, pc.err);
   Result pw = nova_cli("render --run " + run + " --out " + (dir / "pose_words").string() +
-                           " --time 0 --no-masks --pose 1 0 0 0 0 1 0 0 0 0 1 0", dir);
+                           " --time 0 --pose 1 0 0 0 0 -1 0 0 0 0 -1 -0.5 --no-masks", dir);
   BOOST_TEST(pw.code == 0, pw.err);
   BOOST_TEST(read_all(dir / "pose_commas" / "000.png") == read_all(dir / "pose_words" / "000.png"));
 }

@@ -63,6 +63,26 @@ Camera parse_pose(const std::vector<std::string>& words, Camera base) {
   return base;
 }
 
+// The words after --pose that are numbers joined into one argument, so that a pose typed as
+// twelve words may hold negative numbers (which the option parser would take for options).
+Args join_pose_words(const Args& args) {
+  Args out;
+  for (size_t i = 0; i < args.size(); ++i) {
+    out.push_back(args[i]);
+    if (args[i] != "--pose") continue;
+    std::string joined;
+    for (; i + 1 < args.size(); ++i) {
+      const std::string& w = args[i + 1];
+      char* end = nullptr;
+      std::strtod(w.c_str(), &end);
+      if (w.empty() || end == w.c_str() || *end != '\0') break;  // not a number: the next option
+      joined += (joined.empty() ? "" : " ") + w;
+    }
+    if (!joined.empty()) out.push_back(joined);
+  }
+  return out;
+}
+
 // A number as the user would write it (no trailing zeros).
 std::string vm_text(double x) {
   std::ostringstream o;
@@ -110,7 +130,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
       "out", po::value<std::string>()->required(), "output folder (must not exist unless --force)")(
       "scene", po::value<std::string>()->default_value(""), "scene folder (default: the run's)")(
       "camera", po::value<int>()->default_value(0), "camera of frame I of the scene (held-out frames count) to render from")(
-      "pose", po::value<std::vector<std::string>>()->multitoken(),
+      "pose", po::value<std::vector<std::string>>(),
       "12 numbers (spaces or commas): a camera-to-world 3x4 matrix, row-major, in scene coordinates, instead of --camera")(
       "time", po::value<double>(), "object time in [-1, 1] (frame i of N has 2i/N - 1); default: every frame's time")(
       "compose", po::value<std::string>(), "composition spec: render each of its targets (see docs/rendering.md)")(
@@ -120,7 +140,7 @@ int render_rank(const Args& args, MpiJob* mpi) {
       "force", po::bool_switch(), "replace an existing output folder");
   add_blend_options(desc);
   po::variables_map vm;
-  if (!parse(args, desc, vm, "usage: nova render --run RUN --out DIR [--camera I | --pose M] [--time T] [--compose SPEC] [--video]"))
+  if (!parse(join_pose_words(args), desc, vm, "usage: nova render --run RUN --out DIR [--camera I | --pose M] [--time T] [--compose SPEC] [--video]"))
     return 0;
   // Everything the options alone decide is refused before any work.
   check_output_location(vm["out"].as<std::string>(), "--out");
