@@ -125,8 +125,7 @@ void ensure_synthetic(const SceneSpec& s, const std::string& dir) {
 bool finished_run(const std::string& run_dir, const TrainConfig& config, const Scene& scene) {
   const RunFolder run(run_dir);
   if (!fs::exists(run.checkpoint_path())) return false;
-  const std::string want = format_config(config, {"# the scene this run trained on", "scene = " + scene.source});
-  if (read_text(run.config_path()) != want) return false;
+  if (read_text(run.config_path()) != run_config_text(config, scene.source)) return false;
   try {
     const Checkpoint ck = read_checkpoint(run.checkpoint_path());
     return std::stol(ck.get("step")) == long(config.pretrain_steps) + config.steps;

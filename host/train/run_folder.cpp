@@ -9,6 +9,12 @@
 
 namespace nova {
 
+std::string run_config_text(const TrainConfig& config, const std::string& scene_source) {
+  std::error_code ec;
+  const std::filesystem::path scene = std::filesystem::absolute(scene_source, ec).lexically_normal();
+  return format_config(config, {"# the scene this run trained on", "scene = " + (ec ? scene_source : scene.string())});
+}
+
 RunFiles RunFolder::read() const {
   namespace fs = std::filesystem;
   if (!fs::is_directory(dir_)) throw Error("run folder '" + dir_ + "' does not exist");

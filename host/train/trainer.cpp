@@ -103,15 +103,10 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
 }
 
 // Written when training starts or a resume has been accepted, never before: a --resume the
-// checkpoint refuses leaves the run's config.ini as it was. The scene's path is absolute so
-// that nova eval and nova render find it from any folder.
+// checkpoint refuses leaves the run's config.ini as it was.
 void Trainer::write_config() {
   if (config_written_ || !writes_files()) return;
-  std::error_code ec;
-  const fs::path scene = fs::absolute(scene_.source, ec).lexically_normal();
-  write_text_atomic(run_.config_path(),
-                    format_config(config_, {"# the scene this run trained on",
-                                            "scene = " + (ec ? scene_.source : scene.string())}));
+  write_text_atomic(run_.config_path(), run_config_text(config_, scene_.source));
   config_written_ = true;
 }
 

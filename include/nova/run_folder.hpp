@@ -15,6 +15,10 @@ inline const std::string kCheckpointFile = "checkpoint.bin";
 inline const std::string kConfigFile = "config.ini";
 inline const std::string kMetricsFile = "metrics.jsonl";
 
+// The text of a run's config.ini: every option of `config`, then the scene it trains on by
+// its absolute path (so that render and eval find it from any folder).
+std::string run_config_text(const TrainConfig& config, const std::string& scene_source);
+
 // What a run folder holds for inference.
 struct RunFiles {
   std::string dir;
