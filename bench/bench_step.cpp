@@ -165,6 +165,7 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
   if (scene_dir.empty()) throw Error("--run: '" + run.config_path() + "' names no scene: pass --scene");
   LoadOptions lo;
   lo.factor = files.config.factor;
+  lo.static_only = files.config.static_only;
   lo.load_gt = false;
   const Scene scene = load_scene(scene_dir, lo);
   const ScratchDir scratch("step");

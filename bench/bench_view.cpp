@@ -83,6 +83,7 @@ int view(const Args& args) {
   if (scene_dir.empty()) throw Error("run '" + o.str("run") + "' does not name its scene: pass --scene");
   LoadOptions lo;
   lo.factor = run.config.factor;
+  lo.static_only = run.config.static_only;
   lo.load_gt = false;
   const Scene scene = load_scene(scene_dir, lo);
   const int views = static_cast<int>(o.integer("views")), repeats = static_cast<int>(o.integer("repeats"));

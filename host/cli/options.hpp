@@ -44,7 +44,12 @@ inline BlendChoice blend_choice(const po::variables_map& vm) {
 // Parses `args`; prints the help and returns false when --help was given.
 inline bool parse(const Args& args, const po::options_description& desc, po::variables_map& vm,
                   const char* usage_line) {
-  po::store(po::command_line_parser(args).options(desc).run(), vm);
+  const po::parsed_options parsed = po::command_line_parser(args).options(desc).run();
+  // A word that belongs to no option (a stray value, a misquoted list) is an error, not ignored.
+  const std::vector<std::string> stray = po::collect_unrecognized(parsed.options, po::include_positional);
+  if (!stray.empty())
+    throw Error("unexpected argument '" + stray.front() + "' (every value follows its --option)");
+  po::store(parsed, vm);
   if (vm.count("help")) {
     std::cout << usage_line << "\n\n" << desc << "\n";
     return false;

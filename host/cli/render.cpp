@@ -63,21 +63,30 @@ Camera parse_pose(const std::vector<std::string>& words, Camera base) {
   return base;
 }
 
-// The words after --pose that are numbers joined into one argument, so that a pose typed as
-// twelve words may hold negative numbers (which the option parser would take for options).
+// Whether `word` is one or more numbers separated by commas ("-1", "0,-1,", "1,0").
+bool numbers_word(const std::string& word) {
+  bool any = false;
+  std::istringstream parts(word);
+  for (std::string part; std::getline(parts, part, ',');) {
+    if (part.empty()) continue;
+    char* end = nullptr;
+    std::strtod(part.c_str(), &end);
+    if (end == part.c_str() || *end != '\0') return false;
+    any = true;
+  }
+  return any;
+}
+
+// The words after --pose that are numbers (or comma lists of them) joined into one argument,
+// so that a pose typed as several words may hold negative numbers, which the option parser
+// would take for options.
 Args join_pose_words(const Args& args) {
   Args out;
   for (size_t i = 0; i < args.size(); ++i) {
     out.push_back(args[i]);
     if (args[i] != "--pose") continue;
     std::string joined;
-    for (; i + 1 < args.size(); ++i) {
-      const std::string& w = args[i + 1];
-      char* end = nullptr;
-      std::strtod(w.c_str(), &end);
-      if (w.empty() || end == w.c_str() || *end != '\0') break;  // not a number: the next option
-      joined += (joined.empty() ? "" : " ") + w;
-    }
+    for (; i + 1 < args.size() && numbers_word(args[i + 1]); ++i) joined += (joined.empty() ? "" : " ") + args[i + 1];
     if (!joined.empty()) out.push_back(joined);
   }
   return out;
@@ -150,6 +159,8 @@ int render_rank(const Args& args, MpiJob* mpi) {
       if (vm.count(o) && !vm[o].defaulted())
         throw Error("--" + std::string(o) + " does not apply to --compose (each target names its camera and times)");
   }
+  if (vm.count("pose") && vm["pose"].as<std::vector<std::string>>().size() > 1)
+    throw Error("--pose is given more than once: pass one camera");
   if (vm.count("pose") && !vm["camera"].defaulted()) throw Error("--camera and --pose both give the camera: pass one");
   if (!vm["fps"].defaulted() && !video) throw Error("--fps sets the video's frame rate: it needs --video");
   const double fps = vm["fps"].as<double>();
@@ -229,15 +240,18 @@ int render_rank(const Args& args, MpiJob* mpi) {
     } else {
       for (const FolderFrame& f : all_frames) times.push_back(f.time);
     }
+    // Rank 0 counts its own frames (every N-th of an MPI job's).
+    const size_t ranks = mpi ? static_cast<size_t>(mpi->size()) : 1;
+    const size_t own = (times.size() + ranks - 1) / ranks;
     for (size_t i = 0; i < times.size(); ++i) {
-      if (mpi && static_cast<int>(i % static_cast<size_t>(mpi->size())) != mpi->rank()) continue;
+      if (mpi && static_cast<int>(i % ranks) != mpi->rank()) continue;
       ViewRequest req;
       req.camera = camera;
       req.hard_blend = blend.scene_views;
       req.instances = scene_instances(scene.num_objects, times[i]);
       progress.start("view " + std::to_string(i + 1) + "/" + std::to_string(times.size()));
       frames.push_back(write_view(renderer.render(req), staging, frame_name(i).substr(0, 3), masks));
-      if (lead) count_progress("rendered", i + 1, times.size());
+      if (lead) count_progress(mpi ? "rendered (rank 0's frames)" : "rendered", i / ranks + 1, own);
       ++views;
     }
     if (mpi) {  // every frame on disk; rank 0 takes them back in order for the video

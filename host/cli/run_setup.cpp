@@ -13,9 +13,9 @@ OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool 
   OpenRun r{RunFolder(run_dir).read(), {}, {}};
   const std::string dir = scene_dir.empty() ? r.files.scene : scene_dir;
   if (dir.empty()) throw Error("run '" + run_dir + "' does not name its scene: pass --scene");
-  if (scene_dir.empty() && !fs::is_directory(dir))
+  if (scene_dir.empty() && !fs::exists(dir))
     throw Error("the scene '" + dir + "' named in '" + RunFolder(run_dir).config_path() +
-                "' is not a folder (moved, or a relative path from another folder): pass --scene");
+                "' does not exist (moved, or a relative path from another folder): pass --scene");
   r.scene = load_training_scene(dir, r.files.config, load_gt, split);
   r.geometry = ray_geometry(r.scene);
   return r;

@@ -84,9 +84,9 @@ int train_rank(const Args& args, MpiJob* mpi) {
   if (scene_dir.empty() && resume) {
     scene_dir = run.read().scene;
     if (scene_dir.empty()) throw Error("--resume: '" + run.config_path() + "' names no scene: pass --scene");
-    if (!fs::is_directory(scene_dir))
+    if (!fs::exists(scene_dir))
       throw Error("--resume: the scene '" + scene_dir + "' named in '" + run.config_path() +
-                  "' is not a folder: pass --scene");
+                  "' does not exist (moved, or a relative path from another folder): pass --scene");
   }
   if (scene_dir.empty()) throw Error("--scene is required (a scene folder to train on)");
   Scene scene = load_training_scene(scene_dir, config);

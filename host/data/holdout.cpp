@@ -31,10 +31,9 @@ void hold_out_frames(Scene& scene, int every) {
   // Frames 0, N, 2N, ... are held out: N = 1 takes them all, and training needs two.
   const size_t n = scene.frames.size(), held = (n + static_cast<size_t>(every) - 1) / static_cast<size_t>(every);
   if (n - held < 2)
-    throw Error("option 'holdout' " + std::to_string(every) + ": holding out every " + std::to_string(every) +
-                (every == 1 ? "st" : every == 2 ? "nd" : every == 3 ? "rd" : "th") + " frame of scene '" + scene.name +
-                "' leaves " + std::to_string(n - held) + " of its " + std::to_string(n) +
-                " frames to train on (at least 2 are needed)");
+    throw Error("option 'holdout' " + std::to_string(every) + ": holding out frames 0, " + std::to_string(every) +
+                ", " + std::to_string(2 * every) + ", ... of scene '" + scene.name + "' leaves " +
+                std::to_string(n - held) + " of its " + std::to_string(n) + " frames to train on (at least 2 are needed)");
   std::vector<Frame> kept;
   for (size_t i = 0; i < scene.frames.size(); ++i) {
     Frame& f = scene.frames[i];

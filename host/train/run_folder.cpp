@@ -11,7 +11,8 @@ namespace nova {
 
 std::string run_config_text(const TrainConfig& config, const std::string& scene_source) {
   std::error_code ec;
-  const std::filesystem::path scene = std::filesystem::absolute(scene_source, ec).lexically_normal();
+  // weakly_canonical, not lexically_normal: "link/../s" must name the folder the OS read.
+  const std::filesystem::path scene = std::filesystem::weakly_canonical(std::filesystem::absolute(scene_source), ec);
   return format_config(config, {"# the scene this run trained on", "scene = " + (ec ? scene_source : scene.string())});
 }
 
