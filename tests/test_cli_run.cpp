@@ -241,6 +241,24 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
   BOOST_TEST(ur.code == 0, ur.err);
   BOOST_TEST(fs::exists(dir / "ur" / "000_mask0.png"));
   BOOST_TEST(!fs::exists(dir / "ur" / "000_mask1.png"));  // one NeRF: the static one
+
+  // Object masks that leave no background pixel anywhere: refused before training.
+  const fs::path covered = dir / "covered";
+  fs::copy(scene, covered, fs::copy_options::recursive);
+  for (const auto& f : fs::directory_iterator(covered / "motion_masks" / "1")) {
+    const Image8 m = read_mask(f.path().string());
+    write_png(f.path().string(), Image8(m.width, m.height, 1, 255));
+  }
+  expect("train --scene " + covered.string() + " --out " + (dir / "c").string() + kTiny, "no background pixel");
+  BOOST_TEST(!fs::exists(dir / "c"));
+  expect("train --scene " + scene + " --out " + (dir / "e").string() + kTiny + " --adam-eps 0", "adam-eps");
+
+  // With --factor the scene's ground truth is downscaled as its frames are: eval scores it.
+  Result half = nova_cli("train --scene " + scene + " --out " + (dir / "half").string() + kTiny + " --factor 2", dir);
+  BOOST_TEST(half.code == 0, half.err);
+  Result half_eval = nova_cli("eval --run " + (dir / "half").string() + " --views all", dir);
+  BOOST_TEST(half_eval.code == 0, half_eval.err);
+  BOOST_TEST(half_eval.out.find("composition targets: mean PSNR") != std::string::npos, half_eval.out);
   expect("render --run " + (dir / "norun").string() + " --out " + (dir / "r").string(), "norun");
   expect("eval --run " + out + " --views sideways", "sideways");
   // A damaged checkpoint is named as such.

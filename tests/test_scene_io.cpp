@@ -488,6 +488,37 @@ BOOST_AUTO_TEST_CASE(bad_inf_in_poses) {
   expect_error([&] { load_scene(dir.string()); }, {"poses_bounds.npy", "row 0 column 3", "Inf"});
 }
 
+// A pose whose 3x3 part is no rotation (all zero here, or scaled) is refused naming the row.
+BOOST_AUTO_TEST_CASE(bad_pose_axes) {
+  TempDir tmp("bad");
+  const fs::path dir = copy_tiny_scene(tmp);
+  for (size_t c : {0, 1, 2, 5, 6, 7, 10, 11, 12}) poke_pose(dir, 4, c, 0.0);
+  expect_error([&] { load_scene(dir.string()); }, {"poses_bounds.npy", "row 4", "not orthonormal"});
+}
+
+// Disparity maps the depth terms cannot use (flat, or beyond float32's sums) load with a warning.
+BOOST_AUTO_TEST_CASE(unusable_disparity_is_warned_about) {
+  TempDir tmp("disp");
+  const fs::path dir = copy_tiny_scene(tmp);
+  const auto noted = [](const Scene& sc, const std::string& part) {
+    return std::any_of(sc.notes.begin(), sc.notes.end(), [&](const std::string& n) { return n.find(part) != std::string::npos; });
+  };
+  BOOST_TEST(!noted(load_scene(dir.string()), "warning: disp/"));
+  std::vector<fs::path> maps;
+  for (const auto& f : fs::directory_iterator(dir / "disp")) maps.push_back(f.path());
+  const auto scale_all = [&](double by, double plus) {
+    for (const fs::path& f : maps) {
+      NpyArray a = read_npy(f.string());
+      for (double& v : a.values) v = v * by + plus;
+      write_npy_f64(f.string(), a.shape, a.values);
+    }
+  };
+  scale_all(1e20, 0.0);
+  BOOST_TEST(noted(load_scene(dir.string()), "warning: disp/ holds values up to"));
+  scale_all(0.0, 0.5);  // constant
+  BOOST_TEST(noted(load_scene(dir.string()), "warning: disp/ varies by less than 1e-3"));
+}
+
 BOOST_AUTO_TEST_CASE(bad_near_bound) {
   TempDir tmp("bad");
   const fs::path dir = copy_tiny_scene(tmp);

@@ -175,7 +175,13 @@ int eval_rank(const Args& args, MpiJob* mpi) {
     }
   }
   if (!lead) return 0;
-  const std::vector<Score> compose = score_compose_targets(renderer, scene, blend.composition, write);
+  // A checkpoint from static pretraining has no objects to place: its targets are left out.
+  if (!renderer.has_objects() && !scene.compose_gt.empty())
+    std::cerr << "note: composition targets left out: the run's checkpoint is from static pretraining "
+                 "(no object NeRF trained yet)\n";
+  const std::vector<Score> compose = renderer.has_objects()
+                                         ? score_compose_targets(renderer, scene, blend.composition, write)
+                                         : std::vector<Score>{};
 
   const auto [mp, ms] = mean_scores(scores);
   const auto [cp, cs] = mean_scores(compose);

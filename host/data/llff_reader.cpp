@@ -57,6 +57,18 @@ PosesBounds read_poses_bounds(const path& file) {
     if (row[16] <= row[15])
       throw Error(file.string() + ": row " + std::to_string(r) + " has far bound " +
                   num(row[16]) + " <= near bound " + num(row[15]));
+    // The 3x3 part must be a rotation: rays are built from its columns as unit axes. 1e-3
+    // passes poses stored in float32 or printed with six digits.
+    double worst = 0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        double dot = 0;
+        for (int k = 0; k < 3; ++k) dot += row[k * 5 + a] * row[k * 5 + b];
+        worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
+      }
+    if (worst > 1e-3)
+      throw Error(file.string() + ": row " + std::to_string(r) + ": the camera's 3x3 axes are not orthonormal " +
+                  "(largest deviation of R^T R from the identity " + num(worst) + ")");
     pb.c2w.push_back(llff_row_to_gl(row));
     pb.near.push_back(row[15]);
     pb.far.push_back(row[16]);
@@ -135,8 +147,10 @@ std::vector<Image8> read_mask_folder(const path& folder, const path& dir, size_t
   return masks;
 }
 
+// gt/ holds images at the full resolution of images/: with --factor F they are downscaled as
+// the frames are (the views' focal follows their width), so that renders and truth match.
 void read_ground_truth(const path& dir, Scene& scene, const WorldTransform& world,
-                       const std::vector<Camera>& frame_cams) {
+                       const std::vector<Camera>& frame_cams, int factor) {
   const path gt = dir / "gt";
   const path views = gt / "views.txt";
   if (fs::exists(views)) {
@@ -158,14 +172,16 @@ void read_ground_truth(const path& dir, Scene& scene, const WorldTransform& worl
       if (v.time_index < 0 || v.time_index >= int(scene.frames.size()))
         throw Error(views.string() + ":" + std::to_string(line_no) + ": time index " +
                     std::to_string(v.time_index) + " out of range");
-      v.rgb = read_rgb((gt / v.name).string());
+      const Image8 full = read_rgb((gt / v.name).string());
+      v.rgb = downscale_by(full, factor, (gt / v.name).string());
       const path objects = gt / ground_truth_objects_name(v.name);
       if (fs::exists(objects)) {
         v.objects = read_mask(objects.string());
-        if (v.objects.width != v.rgb.width || v.objects.height != v.rgb.height)
+        if (v.objects.width != full.width || v.objects.height != full.height)
           throw Error(objects.string() + ": " + std::to_string(v.objects.width) + "x" +
                       std::to_string(v.objects.height) + ", not the size of its image (" +
-                      std::to_string(v.rgb.width) + "x" + std::to_string(v.rgb.height) + ")");
+                      std::to_string(full.width) + "x" + std::to_string(full.height) + ")");
+        v.objects = resize_nearest(v.objects, v.rgb.width, v.rgb.height);
       }
       v.time = frame_time(v.time_index, int(scene.frames.size()));
       const Camera& ref = frame_cams[0];
@@ -205,7 +221,7 @@ void read_ground_truth(const path& dir, Scene& scene, const WorldTransform& worl
     scene.compose = cs;
     for (const auto& t : scene.compose.targets) {
       const path img = gt / "compose" / (t.name + ".png");
-      if (fs::exists(img)) scene.compose_gt.push_back({t.name, read_rgb(img.string())});
+      if (fs::exists(img)) scene.compose_gt.push_back({t.name, downscale_by(read_rgb(img.string()), factor, img.string())});
     }
     scene.notes.push_back("gt/compose/: " + std::to_string(scene.compose.targets.size()) +
                           " composition targets, " + std::to_string(scene.compose_gt.size()) +
@@ -308,11 +324,14 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
     masks.push_back(std::vector<Image8>(n, Image8(w, h, 1, 255)));
   }
   scene.num_objects = int(masks.size()) - 1;
-  for (size_t k = 1; k < masks.size(); ++k) {
+  for (size_t k = 0; k < masks.size() && masks.size() > 1; ++k) {
     const bool empty = std::all_of(masks[k].begin(), masks[k].end(), [](const Image8& m) {
       return std::all_of(m.data.begin(), m.data.end(), [](uint8_t v) { return v == 0; });
     });
-    if (empty)
+    if (empty && k == 0)
+      scene.notes.push_back("warning: the background's masks (motion_masks/0) are empty in every frame: "
+                            "the static NeRF is taught to be empty everywhere");
+    else if (empty)
       scene.notes.push_back("warning: object " + std::to_string(k) +
                             "'s masks are empty in every frame: its NeRF has nothing to learn");
   }
@@ -326,6 +345,7 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
     if (dfiles.size() != n)
       throw Error(disp_dir.string() + ": " + std::to_string(dfiles.size()) +
                   " disparity maps but " + std::to_string(n) + " images");
+    double spread = 0, magnitude = 0;  // the largest standard deviation and |value| of any map
     for (size_t i = 0; i < n; ++i) {
       const NpyArray a = read_npy(dfiles[i].string());
       if (a.shape.size() != 2 && !(a.shape.size() == 3 && a.shape[2] == 1))
@@ -341,8 +361,25 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
       d.width = int(a.shape[1]);
       d.data.assign(a.values.begin(), a.values.end());
       scene.frames[i].disparity = resize_nearest(d, w, h);
+      double sum = 0, sq = 0, largest = 0;
+      for (double v : a.values) {
+        sum += v;
+        sq += v * v;
+        largest = std::max(largest, std::abs(v));
+      }
+      const double count = static_cast<double>(std::max<size_t>(a.values.size(), 1));
+      spread = std::max(spread, std::sqrt(std::max(0.0, sq / count - (sum / count) * (sum / count))));
+      magnitude = std::max(magnitude, largest);
     }
     scene.notes.push_back("disp/: " + std::to_string(n) + " disparity maps");
+    // The depth terms standardise the disparity in float32 with a variance floor of 1e-6
+    // (kernels/depth_loss.cl): a map that varies less, or whose squares overflow, says nothing.
+    if (spread < 1e-3)
+      scene.notes.push_back("warning: disp/ varies by less than 1e-3 (standard deviation " + num(spread) +
+                            ") in every frame: the depth terms see it as flat; scale the maps up");
+    else if (magnitude > 1e15)
+      scene.notes.push_back("warning: disp/ holds values up to " + num(magnitude) +
+                            ": too large for the depth terms' float32 sums; scale the maps down");
   }
 
   // Poses: reference processing, then cameras.
@@ -380,7 +417,7 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
                         num(world.scale) + "), recentred, NDC");
 
   if (nova && opt.load_gt && fs::is_directory(dir / "gt"))
-    read_ground_truth(dir, scene, world, cams);
+    read_ground_truth(dir, scene, world, cams, factor);
   return scene;
 }
 

@@ -181,7 +181,7 @@ std::vector<ConfigOption> make_options() {
   o.push_back(float_option("adam-beta2", "Adam's decay of the squared-gradient average", 0.0, 0.999999,
                            [](TrainConfig& c) -> float& { return c.adam.beta2; }));
   o.back().before = "0.999";
-  o.push_back(float_option("adam-eps", "Adam's epsilon (added to the root of the squared-gradient average)", 0.0, 1.0,
+  o.push_back(float_option("adam-eps", "Adam's epsilon (added to the root of the squared-gradient average)", 1e-30, 1.0,
                            [](TrainConfig& c) -> float& { return c.adam.eps; }));
   o.back().before = "1e-08";
   o.push_back(bool_option("augment", "novel-view augmentation of the object cameras",

@@ -1,5 +1,6 @@
 #include "nova/trainer.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -92,6 +93,11 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   if (ec) throw Error("cannot create run folder '" + run_.dir() + "': " + ec.message());
   regions_.reserve(scene.frames.size());
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
+  // Pretraining draws background pixels (those no object mask claims): some frame must have one.
+  if (config_.pretrain_steps > 0 &&
+      std::all_of(regions_.begin(), regions_.end(), [](const auto& r) { return r[0].empty(); }))
+    throw Error("scene '" + scene.source + "': the object masks cover every pixel of every frame, so the static " +
+                "NeRF has no background pixel to pretrain on");
   if (config_.occupancy) {
     occupancy_ = std::make_unique<OccupancyEstimator>(geometry_.num_objects, config_.occupancy_res,
                                                       scene_field(config_.field, geometry_).occupancy_bound,
