@@ -27,6 +27,12 @@ void poke_pose(const fs::path& scene, size_t r, size_t c, double v) {
   write_npy_f64(file, a.shape, a.values);
 }
 
+// Whether one of the scene's notes contains `part`.
+bool noted(const Scene& scene, const std::string& part) {
+  return std::any_of(scene.notes.begin(), scene.notes.end(),
+                     [&](const std::string& n) { return n.find(part) != std::string::npos; });
+}
+
 }  // namespace
 
 BOOST_AUTO_TEST_SUITE(scene_io)
@@ -151,9 +157,6 @@ BOOST_AUTO_TEST_CASE(blender_json_with_time) {
   BOOST_TEST(s.frames[1].camera.position(0) == 1.0);
   BOOST_TEST(std::abs(s.frames[0].camera.fx - 0.5 * 8 / std::tan(0.5 * 0.6911112)) < 1e-9);
   BOOST_TEST(!s.ndc);
-  const auto noted = [](const Scene& sc, const std::string& part) {
-    return std::any_of(sc.notes.begin(), sc.notes.end(), [&](const std::string& n) { return n.find(part) != std::string::npos; });
-  };
   BOOST_TEST(!noted(s, "RGBA"));  // plain RGB frames: nothing composited
   // Masks beside a Blender json are not used, and the summary says so.
   fs::create_directories(dir / "motion_masks" / "1");
@@ -381,9 +384,6 @@ BOOST_AUTO_TEST_CASE(bad_mask_aspect_ratio) {
   const Scene s = load_scene(dir.string());
   BOOST_TEST(s.frames[3].masks[1].width == m.width);
   BOOST_TEST((s.frames[3].masks[1].data == m.data));  // nearest-neighbour halving of a doubled mask
-  const auto noted = [&](const Scene& sc, const std::string& part) {
-    return std::any_of(sc.notes.begin(), sc.notes.end(), [&](const std::string& n) { return n.find(part) != std::string::npos; });
-  };
   BOOST_TEST(noted(s, "motion_masks/1/: 1 mask(s) at " + std::to_string(twice.width) + "x" + std::to_string(twice.height)));
   BOOST_TEST(!noted(s, "motion_masks/2/"));  // its masks are at the frames' size
   BOOST_TEST(!noted(s, "warning"));
@@ -500,9 +500,6 @@ BOOST_AUTO_TEST_CASE(bad_pose_axes) {
 BOOST_AUTO_TEST_CASE(unusable_disparity_is_warned_about) {
   TempDir tmp("disp");
   const fs::path dir = copy_tiny_scene(tmp);
-  const auto noted = [](const Scene& sc, const std::string& part) {
-    return std::any_of(sc.notes.begin(), sc.notes.end(), [&](const std::string& n) { return n.find(part) != std::string::npos; });
-  };
   BOOST_TEST(!noted(load_scene(dir.string()), "warning: disp/"));
   std::vector<fs::path> maps;
   for (const auto& f : fs::directory_iterator(dir / "disp")) maps.push_back(f.path());

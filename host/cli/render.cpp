@@ -16,6 +16,7 @@
 #include "cli/options.hpp"
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
+#include "nova/camera.hpp"
 #include "nova/io/compose_spec_text.hpp"
 #include "nova/io/evaluation.hpp"
 #include "nova/io/image_io.hpp"
@@ -46,13 +47,7 @@ Camera parse_pose(const std::vector<std::string>& words, Camera base) {
     throw Error("--pose: expected 12 numbers (the 3x4 camera-to-world matrix, row-major), got " +
                 std::to_string(m.size()) + " in '" + text + "'");
   // Columns orthonormal to 1e-3 (six printed digits pass) and a right-handed frame.
-  double worst = 0;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) {
-      double dot = 0;
-      for (int r = 0; r < 3; ++r) dot += m[static_cast<size_t>(r * 4 + a)] * m[static_cast<size_t>(r * 4 + b)];
-      worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
-    }
+  const double worst = axes_deviation(m.data(), 4);
   const auto at = [&](int r, int c) { return m[static_cast<size_t>(r * 4 + c)]; };
   const double det = at(0, 0) * (at(1, 1) * at(2, 2) - at(1, 2) * at(2, 1)) -
                      at(0, 1) * (at(1, 0) * at(2, 2) - at(1, 2) * at(2, 0)) +

@@ -11,14 +11,18 @@ namespace fs = std::filesystem;
 OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool load_gt,
                  const std::string& split) {
   OpenRun r{RunFolder(run_dir).read(), {}, {}};
-  const std::string dir = scene_dir.empty() ? r.files.scene : scene_dir;
-  if (dir.empty()) throw Error("run '" + run_dir + "' does not name its scene: pass --scene");
-  if (scene_dir.empty() && !fs::exists(dir))
-    throw Error("the scene '" + dir + "' named in '" + RunFolder(run_dir).config_path() +
-                "' does not exist (moved, or a relative path from another folder): pass --scene");
+  const std::string dir = scene_dir.empty() ? named_scene(r.files.scene, RunFolder(run_dir).config_path()) : scene_dir;
   r.scene = load_training_scene(dir, r.files.config, load_gt, split);
   r.geometry = ray_geometry(r.scene);
   return r;
+}
+
+std::string named_scene(const std::string& scene, const std::string& config_path) {
+  if (scene.empty()) throw Error("'" + config_path + "' names no scene: pass --scene");
+  if (!fs::exists(scene))
+    throw Error("the scene '" + scene + "' named in '" + config_path +
+                "' does not exist (moved, or a relative path from another folder): pass --scene");
+  return scene;
 }
 
 void check_output_location(const std::string& path, const std::string& option) {

@@ -22,6 +22,10 @@ struct OpenRun {
 OpenRun open_run(const std::string& run_dir, const std::string& scene_dir, bool load_gt,
                  const std::string& split = "train");
 
+// The scene a run's config.ini (at `config_path`) names: Error, pointing to --scene, when it
+// names none or the path no longer exists (moved, or relative to another folder).
+std::string named_scene(const std::string& scene, const std::string& config_path);
+
 // Error naming `option` unless `path` can be created: its nearest existing ancestor must be a
 // writable folder. Checked before any work, so that a bad --out costs nothing.
 void check_output_location(const std::string& path, const std::string& option);

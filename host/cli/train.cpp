@@ -81,13 +81,7 @@ int train_rank(const Args& args, MpiJob* mpi) {
   }
 
   std::string scene_dir = vm.count("scene") ? vm["scene"].as<std::string>() : "";
-  if (scene_dir.empty() && resume) {
-    scene_dir = run.read().scene;
-    if (scene_dir.empty()) throw Error("--resume: '" + run.config_path() + "' names no scene: pass --scene");
-    if (!fs::exists(scene_dir))
-      throw Error("--resume: the scene '" + scene_dir + "' named in '" + run.config_path() +
-                  "' does not exist (moved, or a relative path from another folder): pass --scene");
-  }
+  if (scene_dir.empty() && resume) scene_dir = named_scene(run.scene(), run.config_path());
   if (scene_dir.empty()) throw Error("--scene is required (a scene folder to train on)");
   Scene scene = load_training_scene(scene_dir, config);
   if (lead) {

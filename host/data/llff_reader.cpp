@@ -9,6 +9,7 @@
 #include "nova/error.hpp"
 #include "nova/io/compose_spec_text.hpp"
 #include "nova/io/image_io.hpp"
+#include "nova/camera.hpp"
 #include "nova/io/llff_poses.hpp"
 #include "nova/io/npy.hpp"
 #include "nova/io/scene_io.hpp"
@@ -59,13 +60,7 @@ PosesBounds read_poses_bounds(const path& file) {
                   num(row[16]) + " <= near bound " + num(row[15]));
     // The 3x3 part must be a rotation: rays are built from its columns as unit axes. 1e-3
     // passes poses stored in float32 or printed with six digits.
-    double worst = 0;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) {
-        double dot = 0;
-        for (int k = 0; k < 3; ++k) dot += row[k * 5 + a] * row[k * 5 + b];
-        worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
-      }
+    const double worst = axes_deviation(row, 5);
     if (worst > 1e-3)
       throw Error(file.string() + ": row " + std::to_string(r) + ": the camera's 3x3 axes are not orthonormal " +
                   "(largest deviation of R^T R from the identity " + num(worst) + ")");
@@ -324,16 +319,17 @@ Scene load_poses_layout(const path& dir, const LoadOptions& opt, bool nova) {
     masks.push_back(std::vector<Image8>(n, Image8(w, h, 1, 255)));
   }
   scene.num_objects = int(masks.size()) - 1;
-  for (size_t k = 0; k < masks.size() && masks.size() > 1; ++k) {
+  // With masks from motion_masks/ (not the static-only stand-in), a NeRF whose mask is empty
+  // in every frame learns nothing, or (the background's) learns to be empty.
+  for (size_t k = 0; masks.size() > 1 && k < masks.size(); ++k) {
     const bool empty = std::all_of(masks[k].begin(), masks[k].end(), [](const Image8& m) {
       return std::all_of(m.data.begin(), m.data.end(), [](uint8_t v) { return v == 0; });
     });
-    if (empty && k == 0)
-      scene.notes.push_back("warning: the background's masks (motion_masks/0) are empty in every frame: "
-                            "the static NeRF is taught to be empty everywhere");
-    else if (empty)
-      scene.notes.push_back("warning: object " + std::to_string(k) +
-                            "'s masks are empty in every frame: its NeRF has nothing to learn");
+    if (!empty) continue;
+    scene.notes.push_back(k == 0 ? std::string("warning: the background's masks (motion_masks/0) are empty in every "
+                                               "frame: the static NeRF is taught to be empty everywhere")
+                                 : "warning: object " + std::to_string(k) +
+                                       "'s masks are empty in every frame: its NeRF has nothing to learn");
   }
   for (size_t i = 0; i < n; ++i)
     for (auto& m : masks) scene.frames[i].masks.push_back(std::move(m[i]));

@@ -16,18 +16,30 @@ std::string run_config_text(const TrainConfig& config, const std::string& scene_
   return format_config(config, {"# the scene this run trained on", "scene = " + (ec ? scene_source : scene.string())});
 }
 
-RunFiles RunFolder::read() const {
-  namespace fs = std::filesystem;
-  if (!fs::is_directory(dir_)) throw Error("run folder '" + dir_ + "' does not exist");
+TrainConfig RunFolder::read_config(std::string& scene) const {
+  if (!std::filesystem::is_directory(dir_)) throw Error("run folder '" + dir_ + "' does not exist");
   const std::string cfg = config_path();
   const std::optional<std::string> text = read_file(cfg);
   if (!text) throw Error("run folder '" + dir_ + "' has no " + kConfigFile + " (not a nova run?)");
   std::vector<std::pair<std::string, std::string>> others;
+  TrainConfig config = parse_config_text(*text, cfg, &others, ConfigFile::RunFile);
+  for (auto& [k, v] : others)
+    if (k == "scene") scene = v;
+  return config;
+}
+
+std::string RunFolder::scene() const {
+  std::string scene;
+  read_config(scene);
+  return scene;
+}
+
+RunFiles RunFolder::read() const {
+  namespace fs = std::filesystem;
+  const std::string cfg = config_path();
   RunFiles r;
   r.dir = dir_;
-  r.config = parse_config_text(*text, cfg, &others, ConfigFile::RunFile);
-  for (auto& [k, v] : others)
-    if (k == "scene") r.scene = v;
+  r.config = read_config(r.scene);
   if (!fs::exists(checkpoint_path()))
     throw Error("run folder '" + dir_ + "' has no " + kCheckpointFile + " yet (training has not saved one)");
   r.checkpoint = read_checkpoint(checkpoint_path());

@@ -11,7 +11,9 @@
 // - Forward-facing scenes are rendered in normalised device coordinates with the near plane
 //   at 1 (Scene::ndc), which assumes fx == fy and the principal point at the image centre,
 //   as the reference's ndc_rays does.
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace nova {
 
@@ -23,5 +25,19 @@ struct Camera {
   double rotation(int r, int c) const { return c2w[r * 4 + c]; }
   double position(int r) const { return c2w[r * 4 + 3]; }
 };
+
+// The largest entry of |R^T R - I| for the 3x3 block R = m[r * row_stride + c] (r, c < 3):
+// 0 when its columns are orthonormal (a rotation or a reflection). Readers refuse camera
+// axes beyond a tolerance, as rays are built from them as unit vectors.
+inline double axes_deviation(const double* m, int row_stride) {
+  double worst = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      double dot = 0;
+      for (int r = 0; r < 3; ++r) dot += m[r * row_stride + a] * m[r * row_stride + b];
+      worst = std::max(worst, std::abs(dot - (a == b ? 1.0 : 0.0)));
+    }
+  return worst;
+}
 
 }  // namespace nova

@@ -39,11 +39,15 @@ class RunFolder {
   // and checkpoint.bin, and checks that the checkpoint holds the networks config.ini
   // describes; Error (exit 2) naming what is missing or bad.
   RunFiles read() const;
+  // The scene config.ini names (empty when none), without reading the checkpoint.
+  std::string scene() const;
   // Error (exit 2) naming the checkpoint file, `configured_by` (what the configuration came
   // from) and both networks unless `ck` holds the networks `config` describes.
   void check_networks(const Checkpoint& ck, const ModelConfig& config, const std::string& configured_by) const;
 
  private:
+  // config.ini as a run file, and the scene it names.
+  TrainConfig read_config(std::string& scene) const;
   std::string dir_;
 };
 
