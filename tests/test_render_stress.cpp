@@ -120,4 +120,57 @@ BOOST_AUTO_TEST_CASE(one_opaque_object_among_transparent_nerfs) {
   check_case(in, "one opaque object");
 }
 
+// The blend channel's gradient where one NeRF's normalised blend b_n is within the epsilon of
+// 1: a NeRF alone (static pretraining, where blend matters only through b = blend / (blend +
+// 1e-6)), and a NeRF whose blend dominates one other's (sigmoid(-12) = 6e-6). There the
+// gradient is about 1e-6 of the colour channels', below the tolerance check_case scales to
+// those; it is checked here on its own scale. An exact but cancelling formula, gb_n -
+// sum_m gb_m b_m, leaves a few ulps of gb_n, errors of 1-10% of this gradient per sample,
+// which Adam's normalisation turns into steps as large as those of any other weight.
+// Reference: float64 central differences with h = 1e-3 in the raw blend (the dependence is
+// smooth: truncation about h^2 / 6 = 2e-7 relative). Allowed: 1e-3 relative plus 1e-4 of the
+// largest blend gradient (float32 rounding of the upstream terms, 16 samples).
+BOOST_AUTO_TEST_CASE(blend_gradient_where_one_blend_is_nearly_one) {
+  for (const int nerfs : {1, 2}) {
+    RenderRefInput in = random_render_case(nerfs, 4, 16, 5, false, true, 61);
+    if (nerfs == 2)
+      for (size_t e = in.raw.size() / 2 + 4; e < in.raw.size(); e += 5) in.raw[e] = -12.0;  // NeRF 1's blend
+    const RenderTargets t = random_targets(in, 62);
+    const DeviceRender d = run_device_render(in, t);
+    const size_t R = in.rays, S = in.samples, C = in.channels;
+    std::vector<double> fd(d.grad_raw.size(), 0.0);
+    double scale = 0;
+    for (size_t r = 0; r < R; ++r) {
+      RayProblem p = ray_problem(in, t, static_cast<int>(r));
+      for (size_t n = 0; n < static_cast<size_t>(nerfs); ++n)
+        for (size_t i = 0; i < S; ++i) {
+          double& x = p.in.raw[(n * S + i) * C + 4];
+          const double x0 = x, h = 1e-3;
+          x = x0 + h;
+          const double lp = ray_loss(p);
+          x = x0 - h;
+          const double lm = ray_loss(p);
+          x = x0;
+          const size_t e = ((n * R + r) * S + i) * C + 4;
+          fd[e] = (lp - lm) / (2 * h);
+          scale = std::max(scale, std::fabs(fd[e]));
+        }
+    }
+    BOOST_TEST_REQUIRE(scale > 0.0);
+    double worst = 0;
+    size_t worst_e = 0;
+    for (size_t e = 4; e < fd.size(); e += C) {
+      const double err = std::fabs(d.grad_raw[e] - fd[e]) / (1e-3 * std::fabs(fd[e]) + 1e-4 * scale);
+      if (!(err <= worst)) {
+        worst = std::isnan(err) ? INFINITY : err;
+        worst_e = e;
+      }
+    }
+    BOOST_TEST_MESSAGE(nerfs << " NeRF(s): largest blend gradient " << scale << ", worst error " << worst
+                             << " of the tolerance");
+    BOOST_TEST(worst <= 1.0, nerfs << " NeRF(s): d loss / d blend[" << worst_e << "] is " << d.grad_raw[worst_e]
+                                   << ", float64 finite difference " << fd[worst_e]);
+  }
+}
+
 BOOST_AUTO_TEST_SUITE_END()
