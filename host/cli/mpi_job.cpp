@@ -202,12 +202,12 @@ int run_as_ranks(const char* command, const std::vector<std::string>& args,
   if (!mpi || mpi->size() == 1) return body(args, nullptr);
   try {
     return body(args, mpi.get());
-  } catch (const Error& e) {
-    std::cerr << "nova " << command << ": rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(e.exit_code());
   } catch (const std::exception& e) {
-    std::cerr << "nova " << command << ": rank " << mpi->rank() << ": error: " << e.what() << std::endl;
-    mpi->abort(kExitInternal);
+    // One write of the whole line (other ranks write to the same stderr).
+    std::cerr << (std::string("nova ") + command + ": rank " + std::to_string(mpi->rank()) + ": error: " + e.what() + "\n")
+              << std::flush;
+    const auto* error = dynamic_cast<const Error*>(&e);
+    mpi->abort(error ? error->exit_code() : kExitInternal);
   }
   return kExitInternal;  // abort() does not return
 }

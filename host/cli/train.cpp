@@ -96,9 +96,11 @@ int train_rank(const Args& args, MpiJob* mpi) {
   const DeviceInfo device = mpi ? rank_device(vm["device"].as<std::string>()) : select_device(vm["device"].as<std::string>());
   const bool profile = vm["profile"].as<bool>();
   Runtime rt(device, profile);
+  // One write of the whole line: the ranks share mpirun's stderr, where separate writes of
+  // its parts interleave with another rank's.
   if (mpi)
-    std::cerr << "nova train: rank " << mpi->rank() << " of " << mpi->size() << " on " << device.id() << " "
-              << device.name << "\n";
+    std::cerr << ("nova train: rank " + std::to_string(mpi->rank()) + " of " + std::to_string(mpi->size()) + " on " +
+                  device.id() + " " + device.name + "\n");
   if (lead) std::cerr << "nova train: " << scene.name << ", " << scene.frames.size() << " frames at "
             << scene.frames[0].rgb.width << "x" << scene.frames[0].rgb.height << ", 1 + " << scene.num_objects
             << " NeRFs, preset " << config.preset << ", " << config.pretrain_steps << " + " << config.steps
