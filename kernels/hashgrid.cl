@@ -148,6 +148,72 @@ __kernel void hashgrid_backward(__global const float* restrict positions,
   }
 }
 
+// d positions (a moved object's samples: rigid_motion): one work-item per (network, row),
+// every level in order. The derivative of a vertex weight along dimension d is the product
+// of the other dimensions' weights, signed by the vertex's side, times the cells per unit of
+// x; a coordinate clamped to the box (not extended) has none.
+__kernel void hashgrid_backward_positions(__global const float* restrict positions,
+                                          __global const float* restrict table,
+                                          __global const float* restrict dout,
+                                          __constant float* res, __constant float* res_t,
+                                          __global float* restrict dpositions, uint nets, uint rows,
+                                          uint levels, uint table_size, float4 inv_bound, int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= nets * rows) return;
+  const uint b = i / rows, r = i % rows;
+  const uint primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
+  const float inv[4] = {inv_bound.x, inv_bound.y, inv_bound.z, inv_bound.w};
+  __global const float* p = positions + (size_t)i * HG_DIMS;
+  float grad[HG_DIMS];
+  for (uint d = 0; d < HG_DIMS; ++d) grad[d] = 0.0f;
+  for (uint l = 0; l < levels; ++l) {
+    const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
+    const int dense = hg_dense(resolution, resolution_t, table_size);
+    uint cell[HG_DIMS];
+    float frac[HG_DIMS], du[HG_DIMS];
+    hg_cells(p, inv_bound, res[l], res_t[l], dense, cell, frac);
+    for (uint d = 0; d < HG_DIMS; ++d) {
+      const int is_t = (HG_DIMS == 4) ? (d == 3) : 0;
+      const int extend = HG_EXTEND ? ((dense | is_t) == 0) : 0;
+      const float u = 0.5f * (p[d] * inv[d] + 1.0f);
+      const int inside = extend ? (u > -1048576.0f && u < 1048576.0f) : (u > 0.0f && u < 1.0f);
+      du[d] = inside ? 0.5f * inv[d] * (is_t ? res_t[l] : res[l]) : 0.0f;
+    }
+    uint term[HG_DIMS][2];
+    float w1[HG_DIMS][2];
+    uint stride = 1;
+    for (uint d = 0; d < HG_DIMS; ++d) {
+      const uint scale = dense ? stride : primes[d];
+      term[d][0] = cell[d] * scale;
+      term[d][1] = (cell[d] + 1u) * scale;
+      w1[d][0] = 1.0f - frac[d];
+      w1[d][1] = frac[d];
+      stride *= hg_res_of(d, resolution, resolution_t) + 1;
+    }
+    const uint mask = dense ? 0xffffffffu : table_size - 1;
+    __global const float* t = table + ((size_t)b * levels + l) * table_size * HG_FEATURES;
+    __global const float* dy = dout + (size_t)i * levels * HG_FEATURES + l * HG_FEATURES;
+    for (uint c = 0; c < HG_CORNERS; ++c) {
+      uint index = term[0][c & 1u];
+      for (uint d = 1; d < HG_DIMS; ++d) {
+        const uint bit = (c >> d) & 1u;
+        index = dense ? index + term[d][bit] : index ^ term[d][bit];
+      }
+      index &= mask;
+      float dot = 0.0f;
+      for (uint f = 0; f < HG_FEATURES; ++f) dot += dy[f] * t[(size_t)index * HG_FEATURES + f];
+      for (uint d = 0; d < HG_DIMS; ++d) {
+        float w = ((c >> d) & 1u) ? 1.0f : -1.0f;
+        for (uint e = 0; e < HG_DIMS; ++e)
+          if (e != d) w *= w1[e][(c >> e) & 1u];
+        grad[d] += dot * w * du[d];
+      }
+    }
+  }
+  __global float* o = dpositions + (size_t)i * HG_DIMS;
+  for (uint d = 0; d < HG_DIMS; ++d) o[d] = accumulate ? o[d] + grad[d] : grad[d];
+}
+
 // ---- The parallel backward: fixed-point sums, exact in any order ---------------------------
 // One work-item per (network, level, row) adds its 2^D F contributions to a table of 64-bit
 // integers with atomics. Integer addition is associative, so the sum, and the run, is the

@@ -72,6 +72,39 @@ void for_each_vertex(const std::vector<float>& pos, size_t rows, size_t dims, co
   }
 }
 
+// The derivative of each vertex weight of one position (D coordinates) along dimension `dim`,
+// in cell units: visit(level, table row, dw) with dw the other dimensions' weights signed by
+// the vertex's side along `dim` (times cells per unit of x gives d/dx). Positions strictly
+// inside the box (no clamp, no extension).
+template <class Visit>
+void for_each_vertex_derivative(const std::vector<float>& pos, size_t dims, size_t dim, const HashGridConfig& c,
+                                Visit visit) {
+  // The vertices in for_each_vertex's order (corner c takes bit d of c along dimension d),
+  // their derivative from the position's fractions.
+  const std::vector<float> res = hash_grid_resolutions(c), res_t = hash_grid_time_resolutions(c);
+  for (int l = 0; l < c.levels; ++l) {
+    double frac[4];
+    for (size_t d = 0; d < dims; ++d) {
+      const double R = d == 3 ? res_t[l] : res[l];
+      const double bound = d == 3 ? 1.0 : c.half_size(static_cast<int>(d));
+      const double u = std::clamp(0.5 * (pos[d] / bound + 1.0), 0.0, 1.0) * R;
+      frac[d] = u - std::min(std::floor(u), R - 1);
+    }
+    uint32_t corner = 0;
+    for_each_vertex(pos, 1, dims, c, [&](size_t, int level, uint64_t row, double) {
+      if (level != l) return;
+      double dw = 1;
+      for (size_t d = 0; d < dims; ++d) {
+        const uint32_t bit = (corner >> d) & 1u;
+        if (d == dim) dw *= bit ? 1.0 : -1.0;
+        else dw *= bit ? frac[d] : 1 - frac[d];
+      }
+      ++corner;
+      visit(l, row, dw);
+    });
+  }
+}
+
 // Float64 reference of one network: positions [M, D], table [L, T, F] -> [M, L * F].
 inline std::vector<double> hash_reference(const std::vector<float>& pos, size_t rows, size_t dims,
                                    const std::vector<float>& table, const HashGridConfig& c) {

@@ -31,6 +31,7 @@ set(owner_distributed ops)         # interfaces only: data-parallel training (ra
 set(owner_hash_grid ops)           # hash_encoding.cpp
 set(owner_kernel_sources runtime)  # generated at build time
 set(owner_losses ops)              # one op per *_loss*.cpp
+set(owner_motion ops)              # rigid_motion.cpp
 set(owner_occupancy ops)           # packing.cpp (the grid type: nerf/occupancy_grid.cpp)
 set(owner_ops ops)                 # one op per file
 set(owner_optim train)             # adam.cpp

@@ -5,6 +5,7 @@ add_library(nova_op_table STATIC
             ${CMAKE_CURRENT_LIST_DIR}/op_table.cpp ${CMAKE_CURRENT_LIST_DIR}/op_table_core.cpp
             ${CMAKE_CURRENT_LIST_DIR}/op_table_losses.cpp ${CMAKE_CURRENT_LIST_DIR}/op_table_ray_losses.cpp
             ${CMAKE_CURRENT_LIST_DIR}/op_table_render.cpp ${CMAKE_CURRENT_LIST_DIR}/op_table_grid.cpp
-            ${CMAKE_CURRENT_LIST_DIR}/op_table_ranks.cpp ${CMAKE_CURRENT_LIST_DIR}/harness_values.cpp)
+            ${CMAKE_CURRENT_LIST_DIR}/op_table_ranks.cpp ${CMAKE_CURRENT_LIST_DIR}/op_table_motion.cpp
+            ${CMAKE_CURRENT_LIST_DIR}/harness_values.cpp)
 target_include_directories(nova_op_table PUBLIC ${CMAKE_CURRENT_LIST_DIR} PRIVATE ${PROJECT_SOURCE_DIR}/host)
 target_link_libraries(nova_op_table PUBLIC nova_core)

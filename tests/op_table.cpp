@@ -15,6 +15,7 @@ const std::vector<OpEntry>& op_table() {
     register_ray_loss_ops(t);
     register_render_ops(t);
     register_grid_ops(t);
+    register_motion_ops(t);
     register_rank_ops(t);
     return t;
   }();

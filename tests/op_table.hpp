@@ -130,6 +130,7 @@ void register_loss_ops(std::vector<OpEntry>& table);
 void register_ray_loss_ops(std::vector<OpEntry>& table);
 void register_render_ops(std::vector<OpEntry>& table);
 void register_grid_ops(std::vector<OpEntry>& table);
+void register_motion_ops(std::vector<OpEntry>& table);
 
 // The depth loss entry (op_table_ray_losses.cpp); with `ranks`, built through the moments
 // summed over ranks (op_table_ranks.cpp uses it with twin ranks).

@@ -10,6 +10,7 @@
 #include "nova/io/image_metrics.hpp"
 #include "nova/io/scene_io.hpp"
 #include "nova/io/visualize.hpp"
+#include "nova/motion.hpp"
 #include "nova/run_folder.hpp"
 #include "nova/trainer.hpp"
 #include "nova/view_renderer.hpp"
@@ -131,9 +132,12 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
   const Scene scene = tiny_scene();
   // Stop at step 8 inside pretraining's hand-over (pretrain 5) and exactly at it (8): the
   // second half runs joint steps with augmentation (every 3rd from the first joint step).
-  for (int pretrain : {5, 8}) {
+  // With a rigid object motion too: its trajectory is a parameter like the others (set once
+  // on entering the joint phase, then trained).
+  for (auto [pretrain, motion] : {std::pair{5, ObjectMotion::None}, {8, ObjectMotion::None}, {5, ObjectMotion::Rigid}}) {
     TempDir dir("resume");
     TrainConfig c = tiny_config(Encoding::HashGrid);
+    c.field.motion = motion;
     c.pretrain_steps = pretrain;
     c.steps = 11;
     c.rays = 64;
@@ -164,6 +168,48 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
       BOOST_TEST(a.arrays[i].name == b.arrays[i].name);
       BOOST_TEST(same_bits(a.arrays[i].values, b.arrays[i].values), "array " << a.arrays[i].name << ", pretrain " << pretrain);
     }
+  }
+}
+
+// A rigid object starts where its masks are: on entering the joint phase every frame's
+// anchor (the motion's translation) projects into that frame inside the object's mask, and
+// in front of the camera; the pivot is the anchors' mean.
+BOOST_AUTO_TEST_CASE(rigid_objects_start_at_their_masks) {
+  const Scene scene = tiny_scene();
+  TempDir dir("rigid");
+  TrainConfig c = tiny_config(Encoding::HashGrid);
+  c.field.motion = ObjectMotion::Rigid;
+  c.pretrain_steps = 60;
+  c.steps = 1;
+  c.lr = 0.0f;  // the one joint step leaves the motion where it started
+  Trainer t(runtime(), scene, c, (dir / "run").string());
+  t.run({}, c.pretrain_steps + 1);
+  const Checkpoint ck = t.checkpoint();
+  const CheckpointArray& m = ck.array("objects.motion");
+  const int K = scene.num_objects, F = static_cast<int>(scene.frames.size());
+  BOOST_REQUIRE(m.values.size() == static_cast<size_t>(K * (F + 1) * 6));
+  for (int k = 1; k <= K; ++k) {
+    const float* rows = m.values.data() + static_cast<size_t>(k - 1) * (F + 1) * 6;
+    Vec3 mean{};
+    for (int f = 0; f < F; ++f) {
+      const Frame& fr = scene.frames[static_cast<size_t>(f)];
+      const Camera& cam = fr.camera;
+      double local[3];  // camera axes (right, up, back) of the anchor
+      for (int a = 0; a < 3; ++a) {
+        local[a] = 0;
+        for (int r = 0; r < 3; ++r) local[a] += cam.rotation(r, a) * (rows[f * 6 + 3 + r] - cam.position(r));
+      }
+      for (int a = 0; a < 3; ++a) mean[static_cast<size_t>(a)] += rows[f * 6 + 3 + a] / F;
+      BOOST_TEST(local[2] < 0.0, "object " << k << " frame " << f << " anchor behind the camera");
+      const int x = static_cast<int>(std::lround(cam.cx + cam.fx * local[0] / -local[2]));
+      const int y = static_cast<int>(std::lround(cam.cy - cam.fy * local[1] / -local[2]));
+      const Image8& mask = fr.masks[static_cast<size_t>(k)];
+      const bool inside = x >= 0 && y >= 0 && x < mask.width && y < mask.height && mask.at(x, y) >= 128;
+      BOOST_TEST(inside, "object " << k << " frame " << f << ": anchor at pixel (" << x << ", " << y << ")");
+      for (int a = 0; a < 3; ++a) BOOST_TEST(rows[f * 6 + a] == 0.0f);  // no turn
+    }
+    for (int a = 0; a < 3; ++a)
+      BOOST_TEST(rows[F * 6 + a] == mean[static_cast<size_t>(a)], boost::test_tools::tolerance(1e-5));
   }
 }
 

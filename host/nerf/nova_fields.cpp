@@ -69,7 +69,7 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c)
     throw Error("object fields: times must be " + ts.str() + ", got " + times.shape().str(),
                 kExitInternal);
   const int networks = batched ? static_cast<int>(ps[0]) : 1;
-  Tensor xyzt = concat({positions, times});
+  Tensor xyzt = c.motion == ObjectMotion::Rigid ? positions : concat({positions, times});
   return build_mlp(encode(xyzt, c, object_hash_config(c), "objects.hash", networks), trunk_config(c, 5, networks),
                    "objects.trunk").output;
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "nova/error.hpp"
+#include "nova/motion.hpp"
 #include "nova/nova_fields.hpp"
 #include "nova/ops.hpp"
 #include "nova/rays.hpp"
@@ -126,10 +127,36 @@ Tensor static_raw(Tensor positions, Tensor viewdirs, const FieldConfig& f, std::
   return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
 }
 
-Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, std::shared_ptr<PackSelect> pack) {
-  if (!pack) return build_object_fields(positions, times, f);
-  Packed p = pack_occupied(positions, pack);
-  Tensor raw = build_object_fields(gather_rows(positions, p), gather_rows(times, p), f);
+MotionOptions motion_options(const RayGeometry& g) {
+  MotionOptions o;
+  o.frames = std::max(1, g.frames);
+  o.ndc = g.ndc;
+  o.ax = g.ax;
+  o.ay = g.ay;
+  o.ndc_near = 1.0f;  // RayOptions::ndc_near
+  return o;
+}
+
+Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, const RayGeometry& g,
+                  std::shared_ptr<PackSelect> pack, Tensor motion) {
+  const Shape& ps = positions.shape();
+  const size_t rows = ps.rank() == 3 ? ps[1] : ps[0];
+  if (f.motion != ObjectMotion::Rigid || !motion.valid()) {
+    Tensor row_times = repeat_rows(times, rows);
+    if (!pack) return build_object_fields(positions, row_times, f);
+    Packed p = pack_occupied(positions, pack);
+    Tensor raw = build_object_fields(gather_rows(positions, p), gather_rows(row_times, p), f);
+    return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
+  }
+  const MotionOptions mo = motion_options(g);
+  // The canonical field does not read time: a placeholder of the right shape.
+  Tensor row_times = repeat_rows(times, rows);
+  if (!pack) return build_object_fields(rigid_motion(positions, times, motion, mo), row_times, f);
+  // Packing tests the canonical positions (a forward only: the decision has no gradient);
+  // the kept rows are moved again, and the gradient reaches the motion through them.
+  Packed p = pack_occupied(rigid_motion(positions, times, motion, mo, /*differentiable=*/false), pack);
+  Tensor canonical = rigid_motion(gather_rows(positions, p), times, motion, mo);
+  Tensor raw = build_object_fields(canonical, gather_rows(row_times, p), f);
   return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
 }
 
@@ -157,7 +184,7 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
   v->rays = rays;
   v->instances = instances;
   v->background = background;
-  const size_t R = static_cast<size_t>(rays), S = static_cast<size_t>(samples);
+  const size_t R = static_cast<size_t>(rays);
   const int N = (background ? 1 : 0) + instances;
   // Every NeRF renders along the same camera; one copy per NeRF gives the per-NeRF spacing
   // tensor render_composite takes. Only the first group's positions are read.
@@ -179,9 +206,11 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
     io.ndc = geo.ndc;
     io.ax = geo.ax;
     io.ay = geo.ay;
+    // A rigid object's learned motion at the instance's time is composed into its transform
+    // by the renderer (motion_matrix): the field sees canonical positions either way.
     Tensor pos = instance_points(smp.positions[0], v->transforms, io);
     v->pack_objects = new_select(packed, std::vector<int>(B, 1));
-    parts.push_back(object_raw(pos, repeat_rows(v->times, R * S), f, v->pack_objects));
+    parts.push_back(object_raw(pos, v->times, f, geo, v->pack_objects));
   }
   Tensor raw = parts.size() == 1 ? parts[0] : stack(parts);
   RenderOptions ro;

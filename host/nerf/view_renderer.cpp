@@ -118,7 +118,37 @@ const Centroid& ViewRenderer::object_centre(int object, double time) {
   o.ax = geometry_.ax;
   o.ay = geometry_.ay;
   o.ndc_near = 1.0;  // the rays' NDC near plane (RayOptions, InstanceOptions)
-  return centres_[key] = density_centroid(density, G, bound, o);
+  Centroid c = density_centroid(density, G, bound, o);
+  // A rigid object's field is its canonical shape: its centre at `time` is where the motion
+  // puts the canonical centre.
+  if (c.found && config_.field.motion == ObjectMotion::Rigid) {
+    const MotionOptions mo = motion_options(geometry_);
+    c.centre = motion_from_canonical(motion_rows(object), mo.frames, time, c.centre);
+  }
+  return centres_[key] = c;
+}
+
+const float* ViewRenderer::motion_rows(int object) const {
+  const CheckpointArray& a = checkpoint_.array("objects.motion");
+  const size_t slice = a.values.size() / static_cast<size_t>(geometry_.num_objects);
+  return a.values.data() + static_cast<size_t>(object - 1) * slice;
+}
+
+std::array<double, 12> ViewRenderer::object_transform(const PlacedInstance& i) const {
+  if (config_.field.motion != ObjectMotion::Rigid) return i.world_to_object;
+  // world -> the object's scene at its time (the placement) -> its canonical space (motion).
+  const std::array<double, 12> m = motion_matrix(motion_rows(i.object), motion_options(geometry_).frames, i.time);
+  const std::array<double, 12>& p = i.world_to_object;
+  std::array<double, 12> out{};
+  for (size_t r = 0; r < 3; ++r) {
+    for (size_t c = 0; c < 4; ++c) {
+      double v = 0;
+      for (size_t k = 0; k < 3; ++k) v += m[r * 4 + k] * p[k * 4 + c];
+      out[r * 4 + c] = v;
+    }
+    out[r * 4 + 3] += m[r * 4 + 3];
+  }
+  return out;
 }
 
 InstancePivot ViewRenderer::pivot_for(const ComposeInstance& inst) {
@@ -257,7 +287,7 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
   if (B > 0) {
     std::vector<float> xf, times;
     for (const PlacedInstance& i : instances) {
-      for (double x : i.world_to_object) xf.push_back(static_cast<float>(x));
+      for (double x : object_transform(i)) xf.push_back(static_cast<float>(x));
       times.push_back(static_cast<float>(i.time));
     }
     c.exec->set(vg.transforms, xf);

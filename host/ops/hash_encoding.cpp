@@ -16,8 +16,9 @@ constexpr int kMaxDims = 4, kMaxFeatures = 8, kMaxLevels = 32;
 
 class HashEncodingOp final : public Op {
  public:
-  HashEncodingOp(size_t nets, size_t rows, size_t dims, const HashGridConfig& c)
-      : nets_(nets), rows_(rows), dims_(dims), c_(c), res_(hash_grid_resolutions(c)), res_t_(hash_grid_time_resolutions(c)) {}
+  HashEncodingOp(size_t nets, size_t rows, size_t dims, const HashGridConfig& c, bool position_grad)
+      : nets_(nets), rows_(rows), dims_(dims), c_(c), res_(hash_grid_resolutions(c)), res_t_(hash_grid_time_resolutions(c)),
+        position_grad_(position_grad) {}
   std::string type() const override { return "hash_encoding"; }
 
   void forward(ExecContext& ctx) override {
@@ -32,6 +33,7 @@ class HashEncodingOp final : public Op {
   }
 
   void backward(ExecContext& ctx) override {
+    backward_positions(ctx);
     cl_mem dy = ctx.grad_out(0), dtable = ctx.grad_in(1);
     if (!dtable) return;
     if (!dy) {  // nothing downstream reads the encoding: its table gradient is zero
@@ -52,8 +54,29 @@ class HashEncodingOp final : public Op {
         .run(nets_ * c_.levels);
   }
 
-  // The table gradient needs the positions only; the table itself is linear in the output.
-  std::vector<TensorId> saved_for_backward() const override { return {inputs()[0]}; }
+  // The table gradient needs the positions only (the table is linear in the output); the
+  // positions' gradient reads the table as well.
+  std::vector<TensorId> saved_for_backward() const override {
+    return position_grad_ ? inputs() : std::vector<TensorId>{inputs()[0]};
+  }
+
+  // Runs before the table gradient, which may share nothing with it but reads dy too.
+  void backward_positions(ExecContext& ctx) {
+    cl_mem dy = ctx.grad_out(0), dp = ctx.grad_in(0);
+    const size_t rows = ctx.in_rows(0, rows_);
+    if (!dp || rows == 0) return;
+    if (!dy) {
+      if (!ctx.accumulate_in(0)) ctx.rt.fill_zero(dp, nets_ * rows * dims_ * sizeof(float));
+      return;
+    }
+    upload_resolutions(ctx.rt);
+    ctx.launch("hashgrid", "hashgrid_backward_positions", build_options())
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(dp)
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
+        .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
+        .arg(static_cast<int>(ctx.accumulate_in(0)))
+        .run(nets_ * rows);
+  }
 
   // The atomic backward's fixed-point table.
   size_t workspace_bytes(Runtime& rt, Pass pass) const override {
@@ -107,6 +130,7 @@ class HashEncodingOp final : public Op {
   HashGridConfig c_;
   std::vector<float> res_, res_t_;
   Buffer res_buffer_, res_t_buffer_, absmax_;
+  bool position_grad_;
 };
 
 }  // namespace
@@ -181,14 +205,12 @@ Tensor hash_encoding(Tensor positions, Tensor table, const HashGridConfig& c) {
   if (!(table.shape() == ts))
     throw Error("hash_encoding: table must be " + ts.str() + ", got " + table.shape().str(),
                 kExitInternal);
-  if (positions.info().requires_grad)
-    throw Error("hash_encoding: positions cannot be differentiated (only the table)",
-                kExitInternal);
   Shape out = ps;
   out.dims.back() = static_cast<size_t>(c.outputs());
   Graph& g = *positions.graph;
   Tensor y = g.activation(table.info().name + ".enc", out);
-  g.add(std::make_unique<HashEncodingOp>(nets, ps.rows() / nets, ps.cols(), c), {positions, table},
+  g.add(std::make_unique<HashEncodingOp>(nets, ps.rows() / nets, ps.cols(), c, positions.info().requires_grad),
+        {positions, table},
         {y});
   return y;
 }

@@ -220,6 +220,18 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "1e-06";
   o.push_back(convention_option("pretrain-render", "static pretraining rendered as blend (through the blend normalisation) or plain (a plain NeRF, no blend: the reference code's)",
                                 "blend", "plain", [](TrainConfig& c) -> bool& { return c.conventions.pretrain_plain; }));
+  o.push_back({"object-motion", "object NeRFs: none (the paper's field of x, y, z, t) or rigid (one canonical shape per object of x, y, z, moved by a learned rigid motion per frame, initialised from the masks and the disparity)",
+               [](const TrainConfig& c) { return std::string(object_motion_name(c.field.motion)); },
+               [](TrainConfig& c, const std::string& v) {
+                 const std::string t = trim(v);
+                 if (t == "none") c.field.motion = ObjectMotion::None;
+                 else if (t == "rigid") c.field.motion = ObjectMotion::Rigid;
+                 else bad_value("object-motion", v, "is not one of none, rigid");
+               }});
+  o.back().before = "none";
+  o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
+                           [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
+  o.back().before = "0";
   o.push_back(float_option("w-distortion", "weight of the distortion loss: each object NeRF's weight spread along the rays of its mask (streaks; joint training)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_distortion; }));
   o.push_back(bool_option("static-background-only", "joint training: the static NeRF learns from background pixels only (object pixels send it no gradient; not in the reference)",

@@ -58,8 +58,8 @@ Tensor hash_grid_table(Graph& g, const std::string& name, const HashGridConfig& 
                        int networks = 1);
 
 // positions [M, D] with table [L, T, F], or [B, M, D] with table [B, L, T, F]; D <= 4.
-// Output [M, L * F] or [B, M, L * F]. Differentiable in the table only (sample positions are
-// never trained).
+// Output [M, L * F] or [B, M, L * F]. Differentiable in the table, and in the positions when
+// they take a gradient (samples moved by a learned object motion, motion.hpp).
 Tensor hash_encoding(Tensor positions, Tensor table, const HashGridConfig& c);
 
 // How the table gradient is summed per device (HashBackward, hash_backward_choice): the

@@ -10,12 +10,13 @@
 //            feature -> sigma, blend;  [feature, PE_Ld(viewdir)] -> width/2 ReLU -> rgb
 //            (with view_dirs off the rgb head reads the feature alone)
 //   object:  [PE_L(xyzt)] -> trunk -> rgb, sigma, blend (view-independent, as the reference's
-//            dynamic NeRF)
+//            dynamic NeRF); with a rigid motion [PE_L(xyz)] of the canonical position alone
 // Parameter names: "static.*" and "objects.*"; object parameters carry a leading object
 // dimension [K, ...] when K > 1, so one object's weights are a slice of them.
 #include <string>
 #include "nova/graph.hpp"
 #include "nova/hash_grid.hpp"
+#include "nova/motion.hpp"
 
 namespace nova {
 
@@ -51,6 +52,9 @@ struct FieldConfig {
   // object is seen from one camera per time, so fine levels it cannot constrain fill with
   // hash-collision noise when it is viewed from elsewhere.
   int object_max_resolution = 0;
+  // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
+  // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
+  ObjectMotion motion = ObjectMotion::None;
   int depth = 8;
   int width = 256;
   int skip = 4;        // 0-based trunk layer whose output gets the encoded input appended
@@ -66,7 +70,8 @@ Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& 
 HashGridConfig object_hash_config(const FieldConfig& config);
 
 // positions [B, M, 3] (or [M, 3] for B = 1), times of the same shape with 1 column -> raw
-// [B, M, 5] (or [M, 5]). B object networks with independent weights.
+// [B, M, 5] (or [M, 5]). B object networks with independent weights. With a rigid motion the
+// positions are canonical and the times are not read.
 Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& config);
 
 // Parameter name prefixes, for checkpoints and the inference renderer.

@@ -47,8 +47,15 @@ std::shared_ptr<PackSelect> new_select(bool on, std::vector<int> grid_of_batch);
 std::vector<int> object_grids(int objects);
 // The static field on the samples `pack` keeps (every one without), the rest empty_raw_fill.
 Tensor static_raw(Tensor positions, Tensor viewdirs, const FieldConfig& f, std::shared_ptr<PackSelect> pack);
-// The object fields at `times`, on the samples `pack` keeps as static_raw.
-Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, std::shared_ptr<PackSelect> pack);
+// The object fields at `times` ([K, 1]: one time per object NeRF), on the samples `pack` keeps
+// as static_raw. With a rigid motion the samples are moved into each object's canonical space
+// first by `motion` (motion_parameter; the packing tests the canonical positions); without
+// `motion` the positions are canonical already (a view: the renderer composes each object's
+// motion at its time into the instance's transform).
+Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, const RayGeometry& g,
+                  std::shared_ptr<PackSelect> pack, Tensor motion = {});
+// The rigid_motion options of the scene's time axis and rays.
+MotionOptions motion_options(const RayGeometry& g);
 
 struct ViewGraph {
   Graph graph;

@@ -54,6 +54,9 @@ struct TrainConfig : ModelConfig {
   // Weight more than the margin *behind* that depth costs free_space_behind times as much: an
   // object pushed back along the one camera's rays renders the same training image.
   float free_space_behind = 0.0f;
+  // With a rigid object motion (FieldConfig::motion): weight of the trajectories' smoothness
+  // (second differences of the per-frame motion, motion_smoothness).
+  float w_motion_smooth = 0.0f;
   // Empty-space skipping (occupancy.hpp; on with ModelConfig::occupancy): one grid per NeRF,
   // updated from the density every occupancy_every steps once occupancy_warmup steps of a
   // phase have passed; samples in empty cells never reach an MLP.

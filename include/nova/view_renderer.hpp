@@ -131,6 +131,11 @@ class ViewRenderer {
   PlacedInstance place(const ComposeInstance& inst) { return placed_instance(inst, pivot_for(inst).pivot); }
 
  private:
+  // A rigid object's motion rows in the checkpoint (motion.hpp), and an instance's
+  // world -> canonical transform (its placement, then that motion at its time).
+  const float* motion_rows(int object) const;
+  std::array<double, 12> object_transform(const PlacedInstance& i) const;
+
   struct Cached;
   struct Probe;
   Cached& graph_for(bool background, int instances, int rays, bool hard_blend, bool packed);

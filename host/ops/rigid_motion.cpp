@@ -1,0 +1,209 @@
+// rigid_motion and motion_smoothness (motion.hpp; kernels/motion.cl), and the host maps.
+#include <algorithm>
+#include <cmath>
+
+#include "nova/error.hpp"
+#include "nova/executor.hpp"
+#include "nova/motion.hpp"
+#include "nova/runtime.hpp"
+#include "op_util.hpp"
+
+namespace nova {
+namespace {
+
+constexpr size_t kMotionCols = 6;
+constexpr size_t kRowGradCols = 9;  // per row: angles, translation, pivot
+
+class RigidMotionOp final : public Op {
+ public:
+  RigidMotionOp(size_t nets, size_t rows, const MotionOptions& o, bool differentiable)
+      : nets_(nets), rows_(rows), o_(o), differentiable_(differentiable) {}
+  std::string type() const override { return "rigid_motion"; }
+
+  void forward(ExecContext& ctx) override {
+    const size_t rows = ctx.in_rows(0, rows_);
+    if (rows == 0) return;
+    ctx.launch("motion", "rigid_motion_forward")
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.out(0))
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows")).arg(frames())
+        .arg(static_cast<int>(o_.ndc)).arg(o_.ax).arg(o_.ay).arg(o_.ndc_near)
+        .run(nets_ * rows);
+  }
+
+  void backward(ExecContext& ctx) override {
+    cl_mem dm = ctx.grad_in(2);
+    if (!dm) return;
+    const size_t rows = ctx.in_rows(0, rows_);
+    cl_mem dy = ctx.grad_out(0);
+    if (!dy || rows == 0) {  // nothing downstream reads the canonical positions
+      if (!ctx.accumulate_in(2)) ctx.rt.fill_zero(dm, nets_ * (o_.frames + 1) * kMotionCols * sizeof(float));
+      return;
+    }
+    ctx.launch("motion", "rigid_motion_row_grad")
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(dy).arg(ctx.workspace())
+        .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows")).arg(frames())
+        .arg(static_cast<int>(o_.ndc)).arg(o_.ax).arg(o_.ay).arg(o_.ndc_near)
+        .run(nets_ * rows);
+    ctx.launch("motion", "rigid_motion_param_grad")
+        .arg(ctx.workspace()).arg(ctx.in(1)).arg(dm).arg(detail::u32(nets_, "networks"))
+        .arg(detail::u32(rows, "rows")).arg(frames()).arg(static_cast<int>(ctx.accumulate_in(2)))
+        .run(nets_ * kRowGradCols);
+  }
+
+  std::vector<TensorId> saved_for_backward() const override { return inputs(); }
+  bool differentiable_in(size_t index) const override { return differentiable_ && index == 2; }
+  size_t workspace_bytes(Runtime&, Pass pass) const override {
+    return pass == Pass::Backward ? nets_ * rows_ * kRowGradCols * sizeof(float) : 0;
+  }
+
+ private:
+  unsigned frames() const { return static_cast<unsigned>(o_.frames); }
+  size_t nets_, rows_;
+  MotionOptions o_;
+  bool differentiable_;
+};
+
+class MotionSmoothnessOp final : public Op {
+ public:
+  MotionSmoothnessOp(size_t nets, int frames) : nets_(nets), frames_(static_cast<unsigned>(frames)) {}
+  std::string type() const override { return "motion_smoothness"; }
+  void forward(ExecContext& ctx) override {
+    ctx.launch("motion", "motion_smoothness_forward")
+        .arg(ctx.in(0)).arg(ctx.out(0)).arg(detail::u32(nets_, "networks")).arg(frames_).run(1);
+  }
+  void backward(ExecContext& ctx) override {
+    cl_mem dm = ctx.grad_in(0), dl = ctx.grad_out(0);
+    if (!dm) return;
+    const size_t n = nets_ * (frames_ + 1) * kMotionCols;
+    if (!dl) {
+      if (!ctx.accumulate_in(0)) ctx.rt.fill_zero(dm, n * sizeof(float));
+      return;
+    }
+    ctx.launch("motion", "motion_smoothness_backward")
+        .arg(ctx.in(0)).arg(dl).arg(dm).arg(detail::u32(nets_, "networks")).arg(frames_)
+        .arg(static_cast<int>(ctx.accumulate_in(0)))
+        .run(n);
+  }
+  std::vector<TensorId> saved_for_backward() const override { return inputs(); }
+
+ private:
+  size_t nets_;
+  unsigned frames_;
+};
+
+// (networks, rows) of a motion parameter [K, F + 1, 6] or [F + 1, 6].
+size_t motion_networks(const Shape& m, int frames, const std::string& op) {
+  const size_t rows = static_cast<size_t>(frames) + 1;
+  if (m.rank() == 2 && m[0] == rows && m[1] == kMotionCols) return 1;
+  if (m.rank() == 3 && m[1] == rows && m[2] == kMotionCols) return m[0];
+  detail::bad_op(op, "motion must be [K, " + std::to_string(rows) + ", 6] or [" + std::to_string(rows) +
+                         ", 6], got " + m.str());
+}
+
+}  // namespace
+
+const char* object_motion_name(ObjectMotion m) { return m == ObjectMotion::Rigid ? "rigid" : "none"; }
+
+Tensor motion_parameter(Graph& g, int objects, int frames) {
+  if (objects < 1 || frames < 1) detail::bad_op("motion_parameter", "needs objects and frames");
+  const size_t rows = static_cast<size_t>(frames) + 1;
+  const Shape s = objects == 1 ? Shape{rows, kMotionCols} : Shape{static_cast<size_t>(objects), rows, kMotionCols};
+  return g.parameter("objects.motion", s, Init::zeros());
+}
+
+Tensor rigid_motion(Tensor positions, Tensor times, Tensor motion, const MotionOptions& o, bool differentiable) {
+  const std::string op = "rigid_motion";
+  if (o.frames < 1) detail::bad_op(op, "frames must be >= 1");
+  detail::require_data(op, positions);
+  detail::require_data(op, times);
+  const detail::Matrix3 p = detail::as_batched(positions.shape(), op);
+  if (p.cols != 3) detail::bad_op(op, "positions must have 3 columns, got " + positions.shape().str());
+  const size_t nets = motion_networks(motion.shape(), o.frames, op);
+  if (nets != p.batch) detail::bad_op(op, "positions " + positions.shape().str() + " do not fit motion " + motion.shape().str());
+  if (times.shape().numel() != nets)
+    detail::bad_op(op, "times must hold one time per network, got " + times.shape().str());
+  Graph& g = *positions.graph;
+  Tensor y = g.activation(positions.info().name + ".canonical", positions.shape());
+  g.add(std::make_unique<RigidMotionOp>(nets, p.rows, o, differentiable), {positions, times, motion}, {y});
+  return y;
+}
+
+Tensor motion_smoothness(Tensor motion, int frames) {
+  const size_t nets = motion_networks(motion.shape(), frames, "motion_smoothness");
+  Graph& g = *motion.graph;
+  Tensor y = g.activation(motion.info().name + ".smoothness", Shape{1});
+  g.add(std::make_unique<MotionSmoothnessOp>(nets, frames), {motion}, {y});
+  return y;
+}
+
+// ---- host maps ----
+
+Mat3 motion_rotation(const Vec3& a) {
+  const double ca = std::cos(a[0]), sa = std::sin(a[0]), cb = std::cos(a[1]), sb = std::sin(a[1]);
+  const double cc = std::cos(a[2]), sc = std::sin(a[2]);
+  const Mat3 rx{1, 0, 0, 0, ca, -sa, 0, sa, ca}, ry{cb, 0, sb, 0, 1, 0, -sb, 0, cb},
+      rz{cc, -sc, 0, sc, cc, 0, 0, 0, 1};
+  auto mul = [](const Mat3& x, const Mat3& y) {
+    Mat3 r{};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k) r[i * 3 + j] += x[i * 3 + k] * y[k * 3 + j];
+    return r;
+  };
+  return mul(mul(rz, ry), rx);
+}
+
+std::array<double, 6> motion_at(const float* rows, int frames, double t) {
+  std::array<double, 6> m{};
+  size_t f0 = 0;
+  double w = 0;
+  if (frames >= 2) {
+    // The kernel's float arithmetic, so that a frame's time picks the same rows.
+    const float u = std::clamp((static_cast<float>(t) + 1.0f) * 0.5f * static_cast<float>(frames), 0.0f,
+                               static_cast<float>(frames - 1));
+    f0 = std::min(static_cast<size_t>(std::floor(u)), static_cast<size_t>(frames - 2));
+    w = static_cast<double>(u) - static_cast<double>(f0);
+  }
+  for (size_t j = 0; j < 6; ++j)
+    m[j] = (1 - w) * rows[f0 * 6 + j] + (frames >= 2 ? w * rows[(f0 + 1) * 6 + j] : 0.0);
+  return m;
+}
+
+Vec3 motion_pivot(const float* rows, int frames) {
+  const float* q = rows + static_cast<size_t>(frames) * 6;
+  return {q[0], q[1], q[2]};
+}
+
+std::array<double, 12> motion_matrix(const float* rows, int frames, double t) {
+  const std::array<double, 6> m = motion_at(rows, frames, t);
+  const Mat3 R = motion_rotation({m[0], m[1], m[2]});
+  const Vec3 q = motion_pivot(rows, frames);
+  std::array<double, 12> x{};
+  for (int i = 0; i < 3; ++i) {
+    double rt = 0;
+    for (int k = 0; k < 3; ++k) {
+      x[static_cast<size_t>(i * 4 + k)] = R[static_cast<size_t>(i * 3 + k)];
+      rt += R[static_cast<size_t>(i * 3 + k)] * m[static_cast<size_t>(3 + k)];
+    }
+    x[static_cast<size_t>(i * 4 + 3)] = q[static_cast<size_t>(i)] - rt;
+  }
+  return x;
+}
+
+Vec3 motion_to_canonical(const float* rows, int frames, double t, const Vec3& x) {
+  const std::array<double, 12> m = motion_matrix(rows, frames, t);
+  Vec3 y{};
+  for (size_t i = 0; i < 3; ++i) y[i] = m[i * 4] * x[0] + m[i * 4 + 1] * x[1] + m[i * 4 + 2] * x[2] + m[i * 4 + 3];
+  return y;
+}
+
+Vec3 motion_from_canonical(const float* rows, int frames, double t, const Vec3& y) {
+  const std::array<double, 12> m = motion_matrix(rows, frames, t);
+  // x = R^T (y - (q - R tau))
+  Vec3 d{}, x{};
+  for (size_t i = 0; i < 3; ++i) d[i] = y[i] - m[i * 4 + 3];
+  for (size_t i = 0; i < 3; ++i) x[i] = m[i] * d[0] + m[4 + i] * d[1] + m[8 + i] * d[2];
+  return x;
+}
+
+}  // namespace nova
