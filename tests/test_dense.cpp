@@ -23,6 +23,11 @@
 //   identity and ReLU bit-equal everywhere, sigmoid and softplus bit-equal except under the
 //   blocked kernel's float8 store (~0.4% of elements, <= 2.8 u |y|), the gradients then
 //   within 2.3 u of their largest. A layout or bias error is O(1) and fails.
+// - fused against two-op under the host BLAS: each row block of the fused path is its own BLAS
+//   call, which may sum in another order than the one call of the two-op path
+//   (host_blas_row_blocks), so y within the sum of the two paths' forward bounds; the
+//   gradients as above. Measured under OpenBLAS's Haswell kernels: 0.7-1.5% of y differ, by at
+//   most 0.031 of that bound, the gradients within 3 u of their largest.
 // - finite differences: the harness default (2e-2 of the gradient's scale), pre-activations
 //   kept 0.05 from ReLU's kink (the stencil moves them by at most 1e-2).
 #include <boost/test/unit_test.hpp>
@@ -132,10 +137,13 @@ Result run_layer(const Case& c, Activation act, bool fused, const Layer& in) {
   return r;
 }
 
-// Forward against float64 (the bound in the header) over the live rows.
-void check_forward(const Case& c, Activation act, const Layer& in, const std::vector<float>& y) {
-  double worst = 0;
-  size_t worst_i = 0;
+// The float64 reference of every live element and its forward bound (the header's).
+struct Reference {
+  std::vector<double> y, bound;
+};
+
+Reference forward_reference(const Case& c, Activation act, const Layer& in) {
+  Reference r;
   for (size_t p = 0; p < c.batch; ++p)
     for (size_t i = 0; i < c.live; ++i)
       for (size_t j = 0; j < c.n; ++j) {
@@ -147,13 +155,38 @@ void check_forward(const Case& c, Activation act, const Layer& in, const std::ve
           mag += std::fabs(t);
         }
         const double ref = test::activation_reference(act, h);
-        const double bound = 2 * (c.k + 1) * u * mag + 16 * u * std::fabs(ref) + 1e-30;
-        const size_t at = (p * c.live + i) * c.n + j;
-        const double e = std::fabs(y[at] - ref) / bound;
-        if (!(e <= worst)) worst = std::isnan(e) ? INFINITY : e, worst_i = at;
+        r.y.push_back(ref);
+        r.bound.push_back(2 * (c.k + 1) * u * mag + 16 * u * std::fabs(ref) + 1e-30);
       }
+  return r;
+}
+
+// Forward against float64 (the bound in the header) over the live rows.
+void check_forward(const Reference& ref, Activation act, const std::vector<float>& y) {
+  double worst = 0;
+  size_t worst_i = 0;
+  for (size_t at = 0; at < ref.y.size(); ++at) {
+    const double e = std::fabs(y[at] - ref.y[at]) / ref.bound[at];
+    if (!(e <= worst)) worst = std::isnan(e) ? INFINITY : e, worst_i = at;
+  }
   BOOST_TEST(worst <= 1.0, activation_name(act) << ": element " << worst_i << " is "
                                                 << y[worst_i] << ", error/bound " << worst);
+}
+
+// Two results that each meet the forward bound: apart by at most the sum of their bounds.
+void expect_within_forward_bounds(const Reference& ref, const std::vector<float>& a, const std::vector<float>& b,
+                                  const std::string& what) {
+  BOOST_REQUIRE_EQUAL(a.size(), b.size());
+  double worst = 0;
+  size_t worst_i = 0, differ = 0;
+  for (size_t at = 0; at < a.size(); ++at) {
+    differ += a[at] != b[at];
+    const double e = std::fabs(double(a[at]) - b[at]) / (2 * ref.bound[at]);
+    if (!(e <= worst)) worst = std::isnan(e) ? INFINITY : e, worst_i = at;
+  }
+  BOOST_TEST_MESSAGE(what << ": " << differ << " of " << a.size() << " elements differ, by " << worst
+                          << " of twice the forward bound at most");
+  BOOST_TEST(worst <= 1.0, what << ": element " << worst_i << " is " << a[worst_i] << " against " << b[worst_i]);
 }
 
 // |a - b| <= 16 u of the larger magnitude per element, or of `scale` (the header).
@@ -215,8 +248,10 @@ class ForcedForward {
   GemmProvider provider_;
 };
 
-// Every activation under `config`: fused against float64 and against the two ops.
-void check_config(const Case& c, const std::string& config, unsigned seed) {
+// Every activation under `config`: fused against float64 and against the two ops. With
+// `same_sums` false (the host BLAS) the fused products need not be summed in the two-op
+// path's order: y is then held to both paths' forward bounds instead of to 16 u |y|.
+void check_config(const Case& c, const std::string& config, unsigned seed, bool same_sums = true) {
   ForcedForward forced(c, config);
   const Layer in = random_layer(c, seed);
   for (Activation act : kActivations) {
@@ -224,8 +259,14 @@ void check_config(const Case& c, const std::string& config, unsigned seed) {
                               << c.live << " of " << c.m << " rows x " << c.k << " -> " << c.n) {
       const Result fused = run_layer(c, act, true, in);
       const Result two = run_layer(c, act, false, in);
-      check_forward(c, act, in, fused.y);
-      expect_ulps(fused.y, two.y, 0, "y fused vs two ops");
+      const Reference ref = forward_reference(c, act, in);
+      check_forward(ref, act, fused.y);
+      if (same_sums) {
+        expect_ulps(fused.y, two.y, 0, "y fused vs two ops");
+      } else {
+        check_forward(ref, act, two.y);
+        expect_within_forward_bounds(ref, fused.y, two.y, "y fused vs two ops");
+      }
       expect_ulps(fused.dw, two.dw, max_abs(two.dw), "dw fused vs two ops");
       expect_ulps(fused.db, two.db, max_abs(two.db), "db fused vs two ops");
     }
@@ -267,20 +308,18 @@ BOOST_AUTO_TEST_CASE(live_rows_below_capacity) {
 
 // The host BLAS (a CPU device with native kernels) applies the identity and ReLU epilogues
 // itself, in row blocks of 8,192 rows at 256 columns: 16411 live rows (of 17011) are two full
-// blocks and a ragged one, two networks batched. Its blocks are the single call's products,
-// so y equals the two-op path (one call, then bias_act's pass) bit for bit.
+// blocks and a ragged one, two networks batched. Each block is its own BLAS call, whose
+// micro-kernel tiles follow the block's rows rather than the whole product's: OpenBLAS's
+// SkylakeX and Cooperlake kernels give the single call's bits, its Haswell and Zen kernels
+// sum the rows near a block's edge in another order (5488 of 16411 rows of a lone 16411 x 29
+// x 256 product, from row 8184 on). So y is held to the forward bound, as the two-op path is,
+// rather than to the two-op path's bits.
 BOOST_AUTO_TEST_CASE(host_blas_row_blocks) {
   if (!host_gemm_available(test::runtime())) {
     BOOST_TEST_MESSAGE("skipped: the device has no host BLAS provider");
     return;
   }
-  const Case c{2, 17011, 29, 256, 16411};
-  check_config(c, "host", 91);
-  ForcedForward forced(c, "host");
-  const Layer in = random_layer(c, 93);
-  for (Activation act : {Activation::Identity, Activation::ReLU})
-    BOOST_TEST((run_layer(c, act, true, in).y == run_layer(c, act, false, in).y),
-               activation_name(act) << ": fused and two-op y differ");
+  check_config({2, 17011, 29, 256, 16411}, "host", 91, /*same_sums=*/false);
 }
 
 BOOST_AUTO_TEST_CASE(which_configurations_fuse_the_epilogue) {

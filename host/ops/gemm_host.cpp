@@ -153,9 +153,11 @@ void run_products(const HostGemmCall& g) {
       g.sgemm(kRowMajor, ta, tb, g.m, g.n, g.k, g.alpha, a, g.lda, b, g.ldb, g.beta, c, g.ldc);
       continue;
     }
-    // Row blocks of op(A) = A (host_gemm_fuses): a BLAS that blocks over k and n alike for
-    // any m computes each C element in the same order as one call would, so the blocks give
-    // the single call's bits (OpenBLAS does; test dense/host_blas_row_blocks checks it).
+    // Row blocks of op(A) = A (host_gemm_fuses), each its own call. Where the BLAS's
+    // micro-kernel tiles follow the call's row count, rows near a block's edge are summed in
+    // another order than one call over all rows would (OpenBLAS's Haswell and Zen kernels;
+    // its SkylakeX and Cooperlake kernels give the single call's bits): the same product to
+    // float32 rounding (test dense/host_blas_row_blocks), and the same bits run to run.
     const int block = static_cast<int>(std::max<size_t>(64, kEpilogueBlockFloats / static_cast<size_t>(g.n)));
     for (int r0 = 0; r0 < g.m; r0 += block) {
       const int rows = std::min(block, g.m - r0);
