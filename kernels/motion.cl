@@ -3,8 +3,9 @@
 //   y = R(a) (x - tau) + q,
 // with x the sample in world coordinates, (a, tau) the motion at t (Euler angles about x, y, z,
 // R = Rz Ry Rx, and a translation) interpolated linearly between the two frames around t, and
-// q the object's pivot. Layout: motion [B, F + 1, 6], rows 0..F-1 one per frame
-// (ax, ay, az, tx, ty, tz), row F the pivot (qx, qy, qz, and three zeros that nothing reads).
+// q the object's pivot, the mean of its per-frame translations: where its canonical shape
+// sits in the scene (a function of the trajectory, so nothing else is stored and it cannot
+// drift apart from it). Layout: motion [B, F, 6], one row per frame (ax, ay, az, tx, ty, tz).
 //
 // In NDC (forward-facing scenes) the motion is applied in world coordinates, where it is rigid:
 // x = ndc^-1(p), p' = ndc(y), with ndc(x) = (ax x/z, ay y/z, 1 + 2 near / z) as
@@ -29,6 +30,14 @@ inline void motion_params(__global const float* P, uint f0, float w, uint frames
   __global const float* a = P + (size_t)f0 * 6;
   __global const float* b = P + (size_t)(frames < 2 ? f0 : f0 + 1) * 6;
   for (int j = 0; j < 6; ++j) m[j] = (1.0f - w) * a[j] + w * b[j];
+}
+
+// q = the mean of the F translations (summed in frame order).
+inline void motion_pivot(__global const float* P, uint frames, float* q) {
+  q[0] = q[1] = q[2] = 0.0f;
+  for (uint f = 0; f < frames; ++f)
+    for (int k = 0; k < 3; ++k) q[k] += P[(size_t)f * 6 + 3 + k];
+  for (int k = 0; k < 3; ++k) q[k] /= (float)frames;
 }
 
 // R = Rz(c) Ry(b) Rx(a) and its three partial derivatives (row-major 3x3 each).
@@ -111,21 +120,21 @@ __kernel void rigid_motion_forward(__global const float* positions, __global con
   const uint i = get_global_id(0);
   if (i >= nets * rows) return;
   const uint b = i / rows;
-  __global const float* P = motion + (size_t)b * (frames + 1) * 6;
+  __global const float* P = motion + (size_t)b * frames * 6;
   uint f0;
-  float w, m[6], R[9], dR[27], x[3], y[3], J[9], o[3];
+  float w, m[6], R[9], dR[27], x[3], y[3], J[9], o[3], q[3];
   motion_frame(times[b], frames, &f0, &w);
   motion_params(P, f0, w, frames, m);
   motion_rotation(m, R, dR);
   motion_to_world(positions + (size_t)i * 3, ndc, ax, ay, near, x);
-  __global const float* q = P + (size_t)frames * 6;
+  motion_pivot(P, frames, q);
   for (int k = 0; k < 3; ++k)
     y[k] = R[k * 3] * (x[0] - m[3]) + R[k * 3 + 1] * (x[1] - m[4]) + R[k * 3 + 2] * (x[2] - m[5]) + q[k];
   motion_to_ndc(y, ndc, ax, ay, near, o, J);
   for (int k = 0; k < 3; ++k) out[(size_t)i * 3 + k] = o[k];
 }
 
-// The gradient of one row with respect to the motion at its time and the pivot,
+// The gradient of one row with respect to the motion at its time and to the pivot,
 // g[b, r, 0..8] (angles, translation, pivot).
 __kernel void rigid_motion_row_grad(__global const float* positions, __global const float* times,
                                     __global const float* motion, __global const float* dout,
@@ -135,14 +144,14 @@ __kernel void rigid_motion_row_grad(__global const float* positions, __global co
   if (i >= nets * rows) return;
   const uint b = i / rows;
   __global float* gi = g + (size_t)i * 9;
-  __global const float* P = motion + (size_t)b * (frames + 1) * 6;
+  __global const float* P = motion + (size_t)b * frames * 6;
   uint f0;
-  float w, m[6], R[9], dR[27], x[3], d[3], y[3], J[9], o[3], gy[3];
+  float w, m[6], R[9], dR[27], x[3], d[3], y[3], J[9], o[3], gy[3], q[3];
   motion_frame(times[b], frames, &f0, &w);
   motion_params(P, f0, w, frames, m);
   motion_rotation(m, R, dR);
   motion_to_world(positions + (size_t)i * 3, ndc, ax, ay, near, x);
-  __global const float* q = P + (size_t)frames * 6;
+  motion_pivot(P, frames, q);
   for (int k = 0; k < 3; ++k) d[k] = x[k] - m[3 + k];
   for (int k = 0; k < 3; ++k) y[k] = R[k * 3] * d[0] + R[k * 3 + 1] * d[1] + R[k * 3 + 2] * d[2] + q[k];
   motion_to_ndc(y, ndc, ax, ay, near, o, J);
@@ -158,46 +167,44 @@ __kernel void rigid_motion_row_grad(__global const float* positions, __global co
   for (int j = 0; j < 3; ++j) gi[6 + j] = gy[j];
 }
 
-// d motion: one work-item per (network, parameter j of 9) sums its rows in order (a fixed
-// order: bit-reproducible). A motion parameter's sum goes to the two frames around the
-// network's time by their interpolation weights, a pivot's to the pivot row; every other
-// entry gets zero (or keeps its value when accumulating).
+// d motion: one work-item per (network, parameter j of 6) sums its rows in order (a fixed
+// order: bit-reproducible) and hands the sum to the two frames around the network's time by
+// their interpolation weights; a translation also moves the pivot (the mean), so every frame
+// gets 1/F of the pivot's sum too. Entries get their value, or add it when accumulating.
 __kernel void rigid_motion_param_grad(__global const float* g, __global const float* times,
                                       __global float* dmotion, uint nets, uint rows, uint frames,
                                       int accumulate) {
   const uint i = get_global_id(0);
-  if (i >= nets * 9) return;
-  const uint b = i / 9, j = i % 9;
-  float s = 0.0f;
-  __global const float* gb = g + (size_t)b * rows * 9 + j;
-  for (uint r = 0; r < rows; ++r) s += gb[(size_t)r * 9];
-  __global float* D = dmotion + (size_t)b * (frames + 1) * 6;
-  if (j >= 6) {  // the pivot (qx, qy, qz), and the three unused entries of its row
-    D += (size_t)frames * 6;
-    D[j - 6] = accumulate ? D[j - 6] + s : s;
-    if (!accumulate) D[j - 3] = 0.0f;
-    return;
+  if (i >= nets * 6) return;
+  const uint b = i / 6, j = i % 6;
+  float s = 0.0f, sq = 0.0f;
+  __global const float* gb = g + (size_t)b * rows * 9;
+  for (uint r = 0; r < rows; ++r) {
+    s += gb[(size_t)r * 9 + j];
+    if (j >= 3) sq += gb[(size_t)r * 9 + j + 3];
   }
+  sq /= (float)frames;
   uint f0;
   float w;
   motion_frame(times[b], frames, &f0, &w);
+  __global float* D = dmotion + (size_t)b * frames * 6 + j;
   for (uint f = 0; f < frames; ++f) {
-    float v = 0.0f;
+    float v = sq;
     if (f == f0) v += (frames < 2 ? 1.0f : 1.0f - w) * s;
     if (frames >= 2 && f == f0 + 1) v += w * s;
-    D[(size_t)f * 6 + j] = accumulate ? D[(size_t)f * 6 + j] + v : v;
+    D[(size_t)f * 6] = accumulate ? D[(size_t)f * 6] + v : v;
   }
 }
 
 // Smoothness of each network's trajectory: loss = sum_b sum_f |P[f-1] - 2 P[f] + P[f+1]|^2 /
-// (B (F - 2)) over frames 1..F-2 (second differences; the pivot row is not part of it).
+// (B (F - 2)) over frames 1..F-2 (second differences).
 // One work-item computes the scalar (B F 6 terms: small), in order.
 __kernel void motion_smoothness_forward(__global const float* motion, __global float* loss, uint nets,
                                         uint frames) {
   if (get_global_id(0) != 0) return;
   float s = 0.0f;
   for (uint b = 0; b < nets; ++b) {
-    __global const float* P = motion + (size_t)b * (frames + 1) * 6;
+    __global const float* P = motion + (size_t)b * frames * 6;
     for (uint f = 1; f + 1 < frames; ++f)
       for (int j = 0; j < 6; ++j) {
         const float d = P[(f - 1) * 6 + j] - 2.0f * P[f * 6 + j] + P[(f + 1) * 6 + j];
@@ -211,11 +218,11 @@ __kernel void motion_smoothness_forward(__global const float* motion, __global f
 __kernel void motion_smoothness_backward(__global const float* motion, __global const float* dloss,
                                          __global float* dmotion, uint nets, uint frames, int accumulate) {
   const uint i = get_global_id(0);
-  if (i >= nets * (frames + 1) * 6) return;
-  const uint j = i % 6, f = (i / 6) % (frames + 1), b = i / (6 * (frames + 1));
-  __global const float* P = motion + (size_t)b * (frames + 1) * 6 + j;
+  if (i >= nets * frames * 6) return;
+  const uint j = i % 6, f = (i / 6) % frames, b = i / (6 * frames);
+  __global const float* P = motion + (size_t)b * frames * 6 + j;
   float v = 0.0f;
-  if (frames > 2 && f < frames) {
+  if (frames > 2) {
     const float scale = 2.0f * dloss[0] / (float)(nets * (frames - 2));
     // f takes part in the second differences centred at f - 1 (weight 1), f (-2), f + 1 (1).
     for (int c = (int)f - 1; c <= (int)f + 1; ++c) {

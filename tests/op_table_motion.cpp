@@ -21,8 +21,8 @@ MotionOptions motion_case_options(const OpShape& s) {
 }
 
 // Positions in the NDC box (z in [-1, 0.6]: world depths 1 to 5) or a metric cube; times
-// anywhere on [-1, 1], frames' own times included; angles up to 0.6 rad; translations and
-// pivots that keep NDC samples in front of the camera (world z in [-4, -2]).
+// anywhere on [-1, 1], frames' own times included; angles up to 0.6 rad; translations about
+// world z = -3, so that the pivot (their mean) keeps NDC samples in front of the camera.
 std::vector<std::vector<float>> motion_case_values(const OpShape& s) {
   const size_t B = s.dims[0], M = s.dims[1], F = s.dims[2];
   std::vector<float> p = random_floats(B * M * 3, -1.0f, 1.0f, 301);
@@ -30,15 +30,12 @@ std::vector<std::vector<float>> motion_case_values(const OpShape& s) {
     for (size_t i = 2; i < p.size(); i += 3) p[i] = -1.0f + 0.8f * (p[i] + 1.0f);
   std::vector<float> t = random_floats(B, -1.0f, 1.0f, 302);
   if (B > 1) t[1] = 2.0f * 1.0f / static_cast<float>(F) - 1.0f;  // exactly frame 1's time
-  std::vector<float> m((F + 1) * 6 * B);
+  std::vector<float> m(F * 6 * B);
   const std::vector<float> r = random_floats(m.size(), -1.0f, 1.0f, 303);
-  for (size_t b = 0; b < B; ++b)
-    for (size_t f = 0; f <= F; ++f)
-      for (size_t j = 0; j < 6; ++j) {
-        const size_t at = (b * (F + 1) + f) * 6 + j;
-        if (f == F) m[at] = j < 3 ? (j == 2 ? -3.0f + 0.3f * r[at] : 0.3f * r[at]) : 0.0f;  // pivot
-        else m[at] = j < 3 ? 0.6f * r[at] : 0.4f * r[at];
-      }
+  for (size_t i = 0; i < m.size(); ++i) {
+    const size_t j = i % 6;
+    m[i] = j < 3 ? 0.6f * r[i] : (j == 5 ? -3.0f : 0.0f) + 0.4f * r[i];
+  }
   return {p, t, m};
 }
 
@@ -56,7 +53,7 @@ std::vector<double> motion_forward(const OpShape& s, const std::vector<float>& p
         const double z = 2.0 * o.ndc_near / std::min(q[2] - 1.0, -1e-6);
         x = {q[0] * z / o.ax, q[1] * z / o.ay, z};
       }
-      Vec3 y = motion_to_canonical(&m[b * (F + 1) * 6], o.frames, t[b], x);
+      Vec3 y = motion_to_canonical(&m[b * F * 6], o.frames, t[b], x);
       if (o.ndc) {
         const double z = std::min(y[2], -1e-6);
         y = {o.ax * y[0] / z, o.ay * y[1] / z, 1.0 + 2.0 * o.ndc_near / z};
@@ -76,7 +73,7 @@ OpEntry rigid_motion_entry() {
     const size_t B = s.dims[0], M = s.dims[1], F = s.dims[2];
     Tensor p = g.input("p", B > 1 ? Shape{B, M, 3} : Shape{M, 3});
     Tensor t = g.input("t", Shape{B, 1});
-    Tensor m = g.input("motion", B > 1 ? Shape{B, F + 1, 6} : Shape{F + 1, 6}, true);
+    Tensor m = g.input("motion", B > 1 ? Shape{B, F, 6} : Shape{F, 6}, true);
     return OpGraph{{p, t, m}, {rigid_motion(p, t, m, motion_case_options(s))}, {}};
   };
   e.values = motion_case_values;
@@ -128,12 +125,12 @@ OpEntry motion_smoothness_entry() {
   e.shapes = {{{1, 9}, 0, "9 frames"}, {{3, 4}, 0, "3 x 4 frames"}, {{2, 2}, 0, "2 x 2 frames (no term)"}};
   e.build = [](Graph& g, const OpShape& s) {
     const size_t B = s.dims[0], F = s.dims[1];
-    Tensor m = g.input("motion", B > 1 ? Shape{B, F + 1, 6} : Shape{F + 1, 6}, true);
+    Tensor m = g.input("motion", B > 1 ? Shape{B, F, 6} : Shape{F, 6}, true);
     Tensor l = motion_smoothness(m, static_cast<int>(F));
     return OpGraph{{m}, {l}, l};
   };
   e.values = [](const OpShape& s) {
-    return std::vector<std::vector<float>>{random_floats(s.dims[0] * (s.dims[1] + 1) * 6, -1, 1, 311)};
+    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1] * 6, -1, 1, 311)};
   };
   const auto compute = [](const OpCase& c, bool grad) {
     const size_t B = c.shape.dims[0], F = c.shape.dims[1];
@@ -145,7 +142,7 @@ OpEntry motion_smoothness_entry() {
       for (size_t b = 0; b < B; ++b)
         for (size_t f = 1; f + 1 < F; ++f)
           for (size_t j = 0; j < 6; ++j) {
-            auto at = [&](size_t g) { return (b * (F + 1) + g) * 6 + j; };
+            auto at = [&](size_t g) { return (b * F + g) * 6 + j; };
             const double s = double(m[at(f - 1)]) - 2.0 * m[at(f)] + m[at(f + 1)];
             loss += s * s / n;
             d[at(f - 1)] += 2 * s / n;

@@ -36,7 +36,7 @@ class RigidMotionOp final : public Op {
     const size_t rows = ctx.in_rows(0, rows_);
     cl_mem dy = ctx.grad_out(0);
     if (!dy || rows == 0) {  // nothing downstream reads the canonical positions
-      if (!ctx.accumulate_in(2)) ctx.rt.fill_zero(dm, nets_ * (o_.frames + 1) * kMotionCols * sizeof(float));
+      if (!ctx.accumulate_in(2)) ctx.rt.fill_zero(dm, nets_ * o_.frames * kMotionCols * sizeof(float));
       return;
     }
     ctx.launch("motion", "rigid_motion_row_grad")
@@ -47,7 +47,7 @@ class RigidMotionOp final : public Op {
     ctx.launch("motion", "rigid_motion_param_grad")
         .arg(ctx.workspace()).arg(ctx.in(1)).arg(dm).arg(detail::u32(nets_, "networks"))
         .arg(detail::u32(rows, "rows")).arg(frames()).arg(static_cast<int>(ctx.accumulate_in(2)))
-        .run(nets_ * kRowGradCols);
+        .run(nets_ * kMotionCols);
   }
 
   std::vector<TensorId> saved_for_backward() const override { return inputs(); }
@@ -74,7 +74,7 @@ class MotionSmoothnessOp final : public Op {
   void backward(ExecContext& ctx) override {
     cl_mem dm = ctx.grad_in(0), dl = ctx.grad_out(0);
     if (!dm) return;
-    const size_t n = nets_ * (frames_ + 1) * kMotionCols;
+    const size_t n = nets_ * frames_ * kMotionCols;
     if (!dl) {
       if (!ctx.accumulate_in(0)) ctx.rt.fill_zero(dm, n * sizeof(float));
       return;
@@ -91,9 +91,9 @@ class MotionSmoothnessOp final : public Op {
   unsigned frames_;
 };
 
-// (networks, rows) of a motion parameter [K, F + 1, 6] or [F + 1, 6].
+// The networks of a motion parameter [K, F, 6] or [F, 6].
 size_t motion_networks(const Shape& m, int frames, const std::string& op) {
-  const size_t rows = static_cast<size_t>(frames) + 1;
+  const size_t rows = static_cast<size_t>(frames);
   if (m.rank() == 2 && m[0] == rows && m[1] == kMotionCols) return 1;
   if (m.rank() == 3 && m[1] == rows && m[2] == kMotionCols) return m[0];
   detail::bad_op(op, "motion must be [K, " + std::to_string(rows) + ", 6] or [" + std::to_string(rows) +
@@ -106,7 +106,7 @@ const char* object_motion_name(ObjectMotion m) { return m == ObjectMotion::Rigid
 
 Tensor motion_parameter(Graph& g, int objects, int frames) {
   if (objects < 1 || frames < 1) detail::bad_op("motion_parameter", "needs objects and frames");
-  const size_t rows = static_cast<size_t>(frames) + 1;
+  const size_t rows = static_cast<size_t>(frames);
   const Shape s = objects == 1 ? Shape{rows, kMotionCols} : Shape{static_cast<size_t>(objects), rows, kMotionCols};
   return g.parameter("objects.motion", s, Init::zeros());
 }
@@ -170,8 +170,11 @@ std::array<double, 6> motion_at(const float* rows, int frames, double t) {
 }
 
 Vec3 motion_pivot(const float* rows, int frames) {
-  const float* q = rows + static_cast<size_t>(frames) * 6;
-  return {q[0], q[1], q[2]};
+  Vec3 q{};
+  for (size_t f = 0; f < static_cast<size_t>(frames); ++f)
+    for (size_t k = 0; k < 3; ++k) q[k] += rows[f * 6 + 3 + k];
+  for (double& v : q) v /= frames;
+  return q;
 }
 
 std::array<double, 12> motion_matrix(const float* rows, int frames, double t) {

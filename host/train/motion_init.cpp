@@ -138,7 +138,7 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
 
   // Per object, the anchor of every frame that shows it; frames without one take their
   // neighbours' (linear between, the nearest beyond).
-  std::vector<float> rows(static_cast<size_t>(K) * (F + 1) * 6, 0.0f);
+  std::vector<float> rows(static_cast<size_t>(K) * F * 6, 0.0f);
   for (int k = 1; k <= K; ++k) {
     std::vector<std::optional<Vec3>> anchor(static_cast<size_t>(F));
     for (size_t i = 0; i < scene.frames.size(); ++i) {
@@ -175,9 +175,8 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
     std::vector<int> known;
     for (int i = 0; i < F; ++i)
       if (anchor[static_cast<size_t>(i)]) known.push_back(i);
-    if (known.empty()) continue;  // never seen: it stays at the origin, and so does its pivot
-    float* r = rows.data() + static_cast<size_t>(k - 1) * (F + 1) * 6;
-    Vec3 mean{};
+    if (known.empty()) continue;  // never seen: it stays at the origin
+    float* r = rows.data() + static_cast<size_t>(k - 1) * F * 6;
     for (int i = 0; i < F; ++i) {
       const auto after = std::lower_bound(known.begin(), known.end(), i);
       Vec3 p;
@@ -189,12 +188,8 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
         for (int d = 0; d < 3; ++d)
           p[d] = (1 - w) * (*anchor[static_cast<size_t>(lo)])[d] + w * (*anchor[static_cast<size_t>(hi)])[d];
       }
-      for (int d = 0; d < 3; ++d) {
-        r[static_cast<size_t>(i) * 6 + 3 + d] = static_cast<float>(p[d]);
-        mean[d] += p[d] / F;
-      }
+      for (int d = 0; d < 3; ++d) r[static_cast<size_t>(i) * 6 + 3 + d] = static_cast<float>(p[d]);
     }
-    for (int d = 0; d < 3; ++d) r[static_cast<size_t>(F) * 6 + d] = static_cast<float>(mean[d]);
   }
   return rows;
 }

@@ -6,9 +6,10 @@
 // R = Rz Ry Rx) and a translation tau; a sample x of time t maps to
 //   y = R(a(t)) (x - tau(t)) + q,
 // (a, tau)(t) linear between the two frames around t (frame i at t = 2 i / F - 1, clamped to
-// the first and last), q the object's pivot: where its canonical shape sits in the scene.
-// Parameter layout [K, F + 1, 6] ([F + 1, 6] for K = 1): rows 0..F-1 per frame, row F the
-// pivot (q, and three entries nothing reads, whose gradient is zero).
+// the first and last), q the object's pivot, the mean of its translations: where its
+// canonical shape sits in the scene. q is a function of the trajectory, not a parameter of
+// its own: a free pivot is redundant with the translations and drifted out of the encoded box.
+// Parameter layout [K, F, 6] ([F, 6] for K = 1), one row per frame.
 //
 // In NDC (forward-facing scenes) x is a sample's world position (NDC -> world as
 // instance_points), and y goes back to NDC for the encoding: a rigid motion is rigid in the
@@ -36,9 +37,9 @@ struct MotionOptions {
 // origin; the trainer sets it from the masks before the first joint step).
 Tensor motion_parameter(Graph& g, int objects, int frames);
 
-// positions [B, M, 3] (or [M, 3]; data), times [B, 1] (data), motion [B, F + 1, 6] (or
-// [F + 1, 6]) -> canonical positions of the same shape as positions. Differentiable in the
-// motion (per frame, by the interpolation weights, and in the pivot); with `differentiable`
+// positions [B, M, 3] (or [M, 3]; data), times [B, 1] (data), motion [B, F, 6] (or [F, 6])
+// -> canonical positions of the same shape as positions. Differentiable in the motion (per
+// frame, by the interpolation weights, and through the pivot); with `differentiable`
 // false a forward only, whose output takes no gradient (what a packing decision reads).
 Tensor rigid_motion(Tensor positions, Tensor times, Tensor motion, const MotionOptions& options,
                     bool differentiable = true);
@@ -56,9 +57,9 @@ using Mat3 = std::array<double, 9>;  // row-major
 // R = Rz(a[2]) Ry(a[1]) Rx(a[0]).
 Mat3 motion_rotation(const Vec3& angles);
 
-// The 6 motion numbers of object `b` at time t from its [F + 1, 6] rows (row-major floats).
+// The 6 motion numbers of one object at time t from its [F, 6] rows (row-major floats).
 std::array<double, 6> motion_at(const float* rows, int frames, double t);
-// The pivot q of the same rows.
+// The pivot q of the same rows: the mean of their translations.
 Vec3 motion_pivot(const float* rows, int frames);
 
 // World point x at time t -> canonical (y = R (x - tau) + q), and back.
