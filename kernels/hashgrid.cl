@@ -67,21 +67,19 @@ inline void hg_cells(__global const float* p, float4 inv_bound, float res, float
 }
 
 // The table rows and weights of the 2^D vertices around point r of network b at level l.
-// Per dimension the two candidate terms (hash: v * prime, dense: v * stride) and the two
-// weights (1 - frac, frac) are formed once; a corner XORs (or adds) one term per dimension and
-// multiplies one weight per dimension. Corner c takes bit d of c along dimension d. The
-// corner loop unrolls (HG_DIMS is a build option), so the bit tests fold away.
-inline void hg_corners(__global const float* positions, uint b, uint rows, uint r, uint l,
-                       __constant float* res, __constant float* res_t, uint table_size,
-                       float4 inv_bound, uint* vertex, float* weight) {
+// hg_level forms, per dimension, the two candidate terms (hash: v * prime, dense: v * stride)
+// and the two weights (1 - frac, frac) of point p at level l, and says whether the level is
+// dense; a corner XORs (or adds) one term per dimension and multiplies one weight per
+// dimension. Corner c takes bit d of c along dimension d. The corner loops unroll (HG_DIMS is
+// a build option), so the bit tests fold away.
+inline int hg_level(__global const float* p, __constant float* res, __constant float* res_t, uint l,
+                    uint table_size, float4 inv_bound, uint term[HG_DIMS][2], float w1[HG_DIMS][2],
+                    float* frac) {
   const uint primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
   const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
   const int dense = hg_dense(resolution, resolution_t, table_size);
   uint cell[HG_DIMS];
-  float frac[HG_DIMS];
-  hg_cells(positions + ((size_t)b * rows + r) * HG_DIMS, inv_bound, res[l], res_t[l], dense, cell, frac);
-  uint term[HG_DIMS][2];
-  float w1[HG_DIMS][2];
+  hg_cells(p, inv_bound, res[l], res_t[l], dense, cell, frac);
   uint stride = 1;
   for (uint d = 0; d < HG_DIMS; ++d) {
     const uint scale = dense ? stride : primes[d];
@@ -91,16 +89,30 @@ inline void hg_corners(__global const float* positions, uint b, uint rows, uint 
     w1[d][1] = frac[d];
     stride *= hg_res_of(d, resolution, resolution_t) + 1;
   }
-  const uint mask = dense ? 0xffffffffu : table_size - 1;
+  return dense;
+}
+
+// The table row of corner c from hg_level's terms.
+inline uint hg_vertex(uint term[HG_DIMS][2], int dense, uint table_size, uint c) {
+  uint index = term[0][c & 1u];
+  for (uint d = 1; d < HG_DIMS; ++d) {
+    const uint bit = (c >> d) & 1u;
+    index = dense ? index + term[d][bit] : index ^ term[d][bit];
+  }
+  return index & (dense ? 0xffffffffu : table_size - 1);
+}
+
+inline void hg_corners(__global const float* positions, uint b, uint rows, uint r, uint l,
+                       __constant float* res, __constant float* res_t, uint table_size,
+                       float4 inv_bound, uint* vertex, float* weight) {
+  uint term[HG_DIMS][2];
+  float w1[HG_DIMS][2], frac[HG_DIMS];
+  const int dense = hg_level(positions + ((size_t)b * rows + r) * HG_DIMS, res, res_t, l, table_size,
+                             inv_bound, term, w1, frac);
   for (uint c = 0; c < HG_CORNERS; ++c) {
-    uint index = term[0][c & 1u];
     float w = w1[0][c & 1u];
-    for (uint d = 1; d < HG_DIMS; ++d) {
-      const uint bit = (c >> d) & 1u;
-      index = dense ? index + term[d][bit] : index ^ term[d][bit];
-      w *= w1[d][bit];
-    }
-    vertex[c] = index & mask;
+    for (uint d = 1; d < HG_DIMS; ++d) w *= w1[d][(c >> d) & 1u];
+    vertex[c] = hg_vertex(term, dense, table_size, c);
     weight[c] = w;
   }
 }
@@ -160,18 +172,15 @@ __kernel void hashgrid_backward_positions(__global const float* restrict positio
                                           uint levels, uint table_size, float4 inv_bound, int accumulate) {
   const uint i = get_global_id(0);
   if (i >= nets * rows) return;
-  const uint b = i / rows, r = i % rows;
-  const uint primes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
+  const uint b = i / rows;
   const float inv[4] = {inv_bound.x, inv_bound.y, inv_bound.z, inv_bound.w};
   __global const float* p = positions + (size_t)i * HG_DIMS;
   float grad[HG_DIMS];
   for (uint d = 0; d < HG_DIMS; ++d) grad[d] = 0.0f;
   for (uint l = 0; l < levels; ++l) {
-    const uint resolution = (uint)res[l], resolution_t = (uint)res_t[l];
-    const int dense = hg_dense(resolution, resolution_t, table_size);
-    uint cell[HG_DIMS];
-    float frac[HG_DIMS], du[HG_DIMS];
-    hg_cells(p, inv_bound, res[l], res_t[l], dense, cell, frac);
+    uint term[HG_DIMS][2];
+    float w1[HG_DIMS][2], frac[HG_DIMS], du[HG_DIMS];
+    const int dense = hg_level(p, res, res_t, l, table_size, inv_bound, term, w1, frac);
     for (uint d = 0; d < HG_DIMS; ++d) {
       const int is_t = (HG_DIMS == 4) ? (d == 3) : 0;
       const int extend = HG_EXTEND ? ((dense | is_t) == 0) : 0;
@@ -179,27 +188,10 @@ __kernel void hashgrid_backward_positions(__global const float* restrict positio
       const int inside = extend ? (u > -1048576.0f && u < 1048576.0f) : (u > 0.0f && u < 1.0f);
       du[d] = inside ? 0.5f * inv[d] * (is_t ? res_t[l] : res[l]) : 0.0f;
     }
-    uint term[HG_DIMS][2];
-    float w1[HG_DIMS][2];
-    uint stride = 1;
-    for (uint d = 0; d < HG_DIMS; ++d) {
-      const uint scale = dense ? stride : primes[d];
-      term[d][0] = cell[d] * scale;
-      term[d][1] = (cell[d] + 1u) * scale;
-      w1[d][0] = 1.0f - frac[d];
-      w1[d][1] = frac[d];
-      stride *= hg_res_of(d, resolution, resolution_t) + 1;
-    }
-    const uint mask = dense ? 0xffffffffu : table_size - 1;
     __global const float* t = table + ((size_t)b * levels + l) * table_size * HG_FEATURES;
     __global const float* dy = dout + (size_t)i * levels * HG_FEATURES + l * HG_FEATURES;
     for (uint c = 0; c < HG_CORNERS; ++c) {
-      uint index = term[0][c & 1u];
-      for (uint d = 1; d < HG_DIMS; ++d) {
-        const uint bit = (c >> d) & 1u;
-        index = dense ? index + term[d][bit] : index ^ term[d][bit];
-      }
-      index &= mask;
+      const uint index = hg_vertex(term, dense, table_size, c);
       float dot = 0.0f;
       for (uint f = 0; f < HG_FEATURES; ++f) dot += dy[f] * t[(size_t)index * HG_FEATURES + f];
       for (uint d = 0; d < HG_DIMS; ++d) {

@@ -117,6 +117,21 @@ inline std::vector<double> hash_reference(const std::vector<float>& pos, size_t 
   return out;
 }
 
+// The same for `nets` networks: positions [nets, M, D], tables [nets, L, T, F] -> [nets, M, L * F].
+inline std::vector<double> hash_reference(const std::vector<float>& pos, const std::vector<float>& tables, size_t rows,
+                                          size_t dims, size_t nets, const HashGridConfig& c) {
+  const size_t tsize = hash_grid_table_shape(c).numel();
+  std::vector<double> ref;
+  for (size_t b = 0; b < nets; ++b) {
+    const std::vector<float> pb(pos.begin() + b * rows * dims, pos.begin() + (b + 1) * rows * dims);
+    const std::vector<float> tb(tables.begin() + b * tsize, tables.begin() + (b + 1) * tsize);
+    const std::vector<double> r = hash_reference(pb, rows, dims, tb, c);
+    ref.insert(ref.end(), r.begin(), r.end());
+  }
+  return ref;
+}
+
+
 // Positions in [-1.3 b, 1.3 b] (some clamped) plus the exact box corners and centre.
 inline std::vector<float> test_positions(size_t rows, size_t dims, float bound, unsigned seed) {
   std::vector<float> p = random_floats(rows * dims, -1.3f * bound, 1.3f * bound, seed);

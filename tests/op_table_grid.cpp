@@ -123,14 +123,7 @@ OpEntry hash_encoding_entry() {
   e.reference = [](const OpCase& c) {
     const size_t rows = c.shape.dims[0], dims = c.shape.dims[1], nets = c.shape.dims[2];
     const HashGridConfig hc = hash_config(c.shape);
-    const size_t tsize = hash_grid_table_shape(hc).numel();
-    std::vector<double> ref;
-    for (size_t b = 0; b < nets; ++b) {
-      const std::vector<float> pb(c.values[0].begin() + b * rows * dims, c.values[0].begin() + (b + 1) * rows * dims);
-      const std::vector<float> tb(c.values[1].begin() + b * tsize, c.values[1].begin() + (b + 1) * tsize);
-      const auto r = hash_reference(pb, rows, dims, tb, hc);
-      ref.insert(ref.end(), r.begin(), r.end());
-    }
+    const std::vector<double> ref = hash_reference(c.values[0], c.values[1], rows, dims, nets, hc);
     // The kernel's grid coordinate u = (x / bound + 1) / 2 * res carries a few float32
     // roundings, up to 4 ulp of res: du <= 4 res 2^-24 per dimension. The output's slope along
     // one coordinate is at most the largest difference of two table values (2 for values in
