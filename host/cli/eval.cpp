@@ -92,7 +92,7 @@ int eval_rank(const Args& args, MpiJob* mpi) {
       "scene", po::value<std::string>()->default_value(""), "scene folder (default: the run's)")(
       "views", po::value<std::string>()->default_value("auto"),
       "ground-truth views: cam0 (the paper's protocol: camera 0 at every time), heldout, all, or auto "
-      "(cam0 when the scene has it, else heldout, else the --split frames)")(
+      "(cam0 when the scene has it, else heldout; not with --split)")(
       "split", po::value<std::string>()->default_value(""), "evaluate every frame of this split (Blender/D-NeRF: test)");
   add_blend_options(desc);
   po::variables_map vm;
