@@ -3,7 +3,7 @@
 // disparity, placed in the rendered depth's units by a least-squares fit to the pretrained
 // static NeRF's depth on background pixels (the only depth that is known to be right, up to
 // the fit); without disparity, from the static NeRF's depth behind the mask (the object stands
-// in front of it).
+// in front of it). The same fallback serves a disparity that does not fit (wrong sign).
 #include "nova/motion_init.hpp"
 
 #include <algorithm>
@@ -98,35 +98,24 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
   // The static NeRF's depth against the disparity on background pixels: depth = a + b disp.
   const bool disparity = disparity_usable(geo);
   double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-  std::vector<std::vector<float>> behind(scene.frames.size());  // static depth in each object's masks
-  std::vector<std::vector<Pixel>> inside(scene.frames.size());
-  for (size_t i = 0; i < scene.frames.size(); ++i) {
-    const Frame& f = scene.frames[i];
+  for (const Frame& f : scene.frames) {
+    if (!disparity) break;
     const Image8& bg = f.masks.at(0);
-    if (disparity) {
-      const std::vector<Pixel> px = grid_pixels(f, kFitPixelsPerFrame, [&](int x, int y) { return bg.at(x, y) >= 128; });
-      const std::vector<float> d = static_depth(ex, *vg, f.camera, px);
-      for (size_t j = 0; j < px.size(); ++j) {
-        const double x = f.disparity.data[static_cast<size_t>(px[j].y) * f.disparity.width + px[j].x], y = d[j];
-        if (!std::isfinite(x) || !std::isfinite(y)) continue;
-        sw += 1;
-        sx += x;
-        sy += y;
-        sxx += x * x;
-        sxy += x * y;
-      }
-    } else {
-      inside[i] = grid_pixels(f, kFitPixelsPerFrame, [&](int x, int y) {
-        for (int k = 1; k <= K; ++k)
-          if (f.masks.at(static_cast<size_t>(k)).at(x, y) >= 128) return true;
-        return false;
-      });
-      behind[i] = static_depth(ex, *vg, f.camera, inside[i]);
+    const std::vector<Pixel> px = grid_pixels(f, kFitPixelsPerFrame, [&](int x, int y) { return bg.at(x, y) >= 128; });
+    const std::vector<float> d = static_depth(ex, *vg, f.camera, px);
+    for (size_t j = 0; j < px.size(); ++j) {
+      const double x = f.disparity.data[static_cast<size_t>(px[j].y) * f.disparity.width + px[j].x], y = d[j];
+      if (!std::isfinite(x) || !std::isfinite(y)) continue;
+      sw += 1;
+      sx += x;
+      sy += y;
+      sxx += x * x;
+      sxy += x * y;
     }
   }
   double a = 0, b = 0;
   bool fitted = false;
-  if (disparity && sw > 2) {
+  if (sw > 2) {
     const double var = sxx - sx * sx / sw;
     if (var > 0) {
       b = (sxy - sx * sy / sw) / var;
@@ -134,6 +123,18 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
       // Nearer is larger disparity and smaller depth: a fit that says otherwise is no fit.
       fitted = b < 0;
     }
+  }
+  // Without a fit: the static NeRF's depth behind the objects' masks.
+  std::vector<std::vector<Pixel>> inside(scene.frames.size());
+  std::vector<std::vector<float>> behind(scene.frames.size());
+  for (size_t i = 0; i < scene.frames.size() && !fitted; ++i) {
+    const Frame& f = scene.frames[i];
+    inside[i] = grid_pixels(f, kFitPixelsPerFrame, [&](int x, int y) {
+      for (int k = 1; k <= K; ++k)
+        if (f.masks.at(static_cast<size_t>(k)).at(x, y) >= 128) return true;
+      return false;
+    });
+    behind[i] = static_depth(ex, *vg, f.camera, inside[i]);
   }
 
   // Per object, the anchor of every frame that shows it; frames without one take their
@@ -152,7 +153,7 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
             cx += x;
             cy += y;
             n += 1;
-            if (disparity) disp.push_back(f.disparity.data[static_cast<size_t>(y) * f.disparity.width + x]);
+            if (fitted) disp.push_back(f.disparity.data[static_cast<size_t>(y) * f.disparity.width + x]);
           }
       if (n == 0) continue;
       cx /= n;

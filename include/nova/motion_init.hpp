@@ -13,7 +13,7 @@ namespace nova {
 
 // The [K, F, 6] motion rows (motion_parameter's layout): per object and frame no turn and
 // a translation to its anchor, the mask's centroid at the object's depth (from the disparity
-// fitted to the static NeRF's depth on background pixels, or without disparity the nearer
+// fitted to the static NeRF's depth on background pixels, or without disparity or a fit the nearer
 // quartile of the static depth behind the mask); frames where the object is not seen take
 // their neighbours' anchors; so y = x - anchor(t) + mean anchor.
 // `trained` holds the static NeRF's weights ("static.*").
