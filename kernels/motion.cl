@@ -113,24 +113,33 @@ inline void motion_to_ndc(const float* y, int ndc, float ax, float ay, float nea
   J[8] = clamped ? 0.0f : -2.0f * near * iz * iz;
 }
 
+// Row i of network b: the motion m at its time, R(m) and its partial derivatives dR, the
+// offset d = x - tau of its world point x, and y = R d + q with its NDC image o (Jacobian J).
+inline void motion_point(__global const float* positions, __global const float* times,
+                         __global const float* motion, uint i, uint b, uint frames, int ndc, float ax,
+                         float ay, float near, float* m, float* R, float* dR, float* d, float* o,
+                         float* J) {
+  __global const float* P = motion + (size_t)b * frames * 6;
+  uint f0;
+  float w, x[3], y[3], q[3];
+  motion_frame(times[b], frames, &f0, &w);
+  motion_params(P, f0, w, frames, m);
+  motion_rotation(m, R, dR);
+  motion_to_world(positions + (size_t)i * 3, ndc, ax, ay, near, x);
+  motion_pivot(P, frames, q);
+  for (int k = 0; k < 3; ++k) d[k] = x[k] - m[3 + k];
+  for (int k = 0; k < 3; ++k) y[k] = R[k * 3] * d[0] + R[k * 3 + 1] * d[1] + R[k * 3 + 2] * d[2] + q[k];
+  motion_to_ndc(y, ndc, ax, ay, near, o, J);
+}
+
 // One work-item per (network, row): out[b, r] = ndc(R (x - tau) + q).
 __kernel void rigid_motion_forward(__global const float* positions, __global const float* times,
                                    __global const float* motion, __global float* out, uint nets,
                                    uint rows, uint frames, int ndc, float ax, float ay, float near) {
   const uint i = get_global_id(0);
   if (i >= nets * rows) return;
-  const uint b = i / rows;
-  __global const float* P = motion + (size_t)b * frames * 6;
-  uint f0;
-  float w, m[6], R[9], dR[27], x[3], y[3], J[9], o[3], q[3];
-  motion_frame(times[b], frames, &f0, &w);
-  motion_params(P, f0, w, frames, m);
-  motion_rotation(m, R, dR);
-  motion_to_world(positions + (size_t)i * 3, ndc, ax, ay, near, x);
-  motion_pivot(P, frames, q);
-  for (int k = 0; k < 3; ++k)
-    y[k] = R[k * 3] * (x[0] - m[3]) + R[k * 3 + 1] * (x[1] - m[4]) + R[k * 3 + 2] * (x[2] - m[5]) + q[k];
-  motion_to_ndc(y, ndc, ax, ay, near, o, J);
+  float m[6], R[9], dR[27], d[3], o[3], J[9];
+  motion_point(positions, times, motion, i, i / rows, frames, ndc, ax, ay, near, m, R, dR, d, o, J);
   for (int k = 0; k < 3; ++k) out[(size_t)i * 3 + k] = o[k];
 }
 
@@ -142,21 +151,11 @@ __kernel void rigid_motion_row_grad(__global const float* positions, __global co
                                     int ndc, float ax, float ay, float near) {
   const uint i = get_global_id(0);
   if (i >= nets * rows) return;
-  const uint b = i / rows;
-  __global float* gi = g + (size_t)i * 9;
-  __global const float* P = motion + (size_t)b * frames * 6;
-  uint f0;
-  float w, m[6], R[9], dR[27], x[3], d[3], y[3], J[9], o[3], gy[3], q[3];
-  motion_frame(times[b], frames, &f0, &w);
-  motion_params(P, f0, w, frames, m);
-  motion_rotation(m, R, dR);
-  motion_to_world(positions + (size_t)i * 3, ndc, ax, ay, near, x);
-  motion_pivot(P, frames, q);
-  for (int k = 0; k < 3; ++k) d[k] = x[k] - m[3 + k];
-  for (int k = 0; k < 3; ++k) y[k] = R[k * 3] * d[0] + R[k * 3 + 1] * d[1] + R[k * 3 + 2] * d[2] + q[k];
-  motion_to_ndc(y, ndc, ax, ay, near, o, J);
+  float m[6], R[9], dR[27], d[3], o[3], J[9], gy[3];
+  motion_point(positions, times, motion, i, i / rows, frames, ndc, ax, ay, near, m, R, dR, d, o, J);
   __global const float* dy = dout + (size_t)i * 3;
   for (int k = 0; k < 3; ++k) gy[k] = J[k] * dy[0] + J[3 + k] * dy[1] + J[6 + k] * dy[2];
+  __global float* gi = g + (size_t)i * 9;
   for (int j = 0; j < 3; ++j) {
     float s = 0.0f;
     for (int k = 0; k < 3; ++k)

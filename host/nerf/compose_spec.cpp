@@ -5,18 +5,13 @@
 #include <cmath>
 
 #include "nova/error.hpp"
+#include "nova/motion.hpp"
 
 namespace nova {
 
 std::array<double, 9> euler_xyz_deg_to_matrix(const std::array<double, 3>& deg) {
   const double k = std::acos(-1.0) / 180.0;
-  const double cx = std::cos(deg[0] * k), sx = std::sin(deg[0] * k);
-  const double cy = std::cos(deg[1] * k), sy = std::sin(deg[1] * k);
-  const double cz = std::cos(deg[2] * k), sz = std::sin(deg[2] * k);
-  // Rz * Ry * Rx
-  return {cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx,
-          sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx,
-          -sy,     cy * sx,                cy * cx};
+  return euler_xyz_to_matrix({deg[0] * k, deg[1] * k, deg[2] * k});
 }
 
 std::array<double, 12> instance_transform(const ComposeInstance& inst) {

@@ -140,23 +140,21 @@ MotionOptions motion_options(const RayGeometry& g) {
 Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, const RayGeometry& g,
                   std::shared_ptr<PackSelect> pack, Tensor motion) {
   const Shape& ps = positions.shape();
-  const size_t rows = ps.rank() == 3 ? ps[1] : ps[0];
-  if (f.motion != ObjectMotion::Rigid || !motion.valid()) {
-    Tensor row_times = repeat_rows(times, rows);
-    if (!pack) return build_object_fields(positions, row_times, f);
-    Packed p = pack_occupied(positions, pack);
-    Tensor raw = build_object_fields(gather_rows(positions, p), gather_rows(row_times, p), f);
-    return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
-  }
+  // The objects' times spread over their rows (a canonical field does not read them: a
+  // placeholder of the right shape).
+  Tensor row_times = repeat_rows(times, ps.rank() == 3 ? ps[1] : ps[0]);
+  // Samples into the field's coordinates: moved into each object's canonical space when it
+  // has a learned motion here. Packing tests those coordinates (a forward only: the decision
+  // has no gradient); the kept rows are moved again, and the gradient reaches the motion
+  // through them.
+  const bool moved = f.motion == ObjectMotion::Rigid && motion.valid();
   const MotionOptions mo = motion_options(g);
-  // The canonical field does not read time: a placeholder of the right shape.
-  Tensor row_times = repeat_rows(times, rows);
-  if (!pack) return build_object_fields(rigid_motion(positions, times, motion, mo), row_times, f);
-  // Packing tests the canonical positions (a forward only: the decision has no gradient);
-  // the kept rows are moved again, and the gradient reaches the motion through them.
-  Packed p = pack_occupied(rigid_motion(positions, times, motion, mo, /*differentiable=*/false), pack);
-  Tensor canonical = rigid_motion(gather_rows(positions, p), times, motion, mo);
-  Tensor raw = build_object_fields(canonical, gather_rows(row_times, p), f);
+  const auto place = [&](Tensor p, bool differentiable) {
+    return moved ? rigid_motion(p, times, motion, mo, differentiable) : p;
+  };
+  if (!pack) return build_object_fields(place(positions, true), row_times, f);
+  Packed p = pack_occupied(place(positions, false), pack);
+  Tensor raw = build_object_fields(place(gather_rows(positions, p), true), gather_rows(row_times, p), f);
   return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
 }
 

@@ -8,19 +8,6 @@
 #include "nova/render.hpp"
 
 namespace nova {
-namespace {
-
-// The inverse of a rigid 3x4 [R | t]: [R^T | -R^T t].
-std::array<double, 12> invert_rigid(const std::array<double, 12>& m) {
-  std::array<double, 12> r{};
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) r[i * 4 + j] = m[j * 4 + i];
-    r[i * 4 + 3] = -(m[0 * 4 + i] * m[3] + m[1 * 4 + i] * m[7] + m[2 * 4 + i] * m[11]);
-  }
-  return r;
-}
-
-}  // namespace
 
 std::vector<PlacedInstance> scene_instances(int objects, double time) {
   std::vector<PlacedInstance> v;
@@ -137,18 +124,8 @@ const float* ViewRenderer::motion_rows(int object) const {
 std::array<double, 12> ViewRenderer::object_transform(const PlacedInstance& i) const {
   if (config_.field.motion != ObjectMotion::Rigid) return i.world_to_object;
   // world -> the object's scene at its time (the placement) -> its canonical space (motion).
-  const std::array<double, 12> m = motion_matrix(motion_rows(i.object), motion_options(geometry_).frames, i.time);
-  const std::array<double, 12>& p = i.world_to_object;
-  std::array<double, 12> out{};
-  for (size_t r = 0; r < 3; ++r) {
-    for (size_t c = 0; c < 4; ++c) {
-      double v = 0;
-      for (size_t k = 0; k < 3; ++k) v += m[r * 4 + k] * p[k * 4 + c];
-      out[r * 4 + c] = v;
-    }
-    out[r * 4 + 3] += m[r * 4 + 3];
-  }
-  return out;
+  return compose_rigid(motion_matrix(motion_rows(i.object), motion_options(geometry_).frames, i.time),
+                       i.world_to_object);
 }
 
 InstancePivot ViewRenderer::pivot_for(const ComposeInstance& inst) {

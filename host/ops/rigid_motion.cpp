@@ -138,19 +138,42 @@ Tensor motion_smoothness(Tensor motion, int frames) {
 
 // ---- host maps ----
 
-Mat3 motion_rotation(const Vec3& a) {
-  const double ca = std::cos(a[0]), sa = std::sin(a[0]), cb = std::cos(a[1]), sb = std::sin(a[1]);
-  const double cc = std::cos(a[2]), sc = std::sin(a[2]);
-  const Mat3 rx{1, 0, 0, 0, ca, -sa, 0, sa, ca}, ry{cb, 0, sb, 0, 1, 0, -sb, 0, cb},
-      rz{cc, -sc, 0, sc, cc, 0, 0, 0, 1};
-  auto mul = [](const Mat3& x, const Mat3& y) {
-    Mat3 r{};
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        for (int k = 0; k < 3; ++k) r[i * 3 + j] += x[i * 3 + k] * y[k * 3 + j];
-    return r;
-  };
-  return mul(mul(rz, ry), rx);
+Mat3 euler_xyz_to_matrix(const Vec3& a) {
+  const double cx = std::cos(a[0]), sx = std::sin(a[0]);
+  const double cy = std::cos(a[1]), sy = std::sin(a[1]);
+  const double cz = std::cos(a[2]), sz = std::sin(a[2]);
+  // Rz * Ry * Rx
+  return {cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx,
+          sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx,
+          -sy,     cy * sx,                cy * cx};
+}
+
+Mat34 invert_rigid(const Mat34& m) {
+  Mat34 r{};
+  for (size_t i = 0; i < 3; ++i) {
+    for (size_t j = 0; j < 3; ++j) r[i * 4 + j] = m[j * 4 + i];
+    r[i * 4 + 3] = -(m[0 * 4 + i] * m[3] + m[1 * 4 + i] * m[7] + m[2 * 4 + i] * m[11]);
+  }
+  return r;
+}
+
+Mat34 compose_rigid(const Mat34& a, const Mat34& b) {
+  Mat34 out{};
+  for (size_t r = 0; r < 3; ++r) {
+    for (size_t c = 0; c < 4; ++c) {
+      double v = 0;
+      for (size_t k = 0; k < 3; ++k) v += a[r * 4 + k] * b[k * 4 + c];
+      out[r * 4 + c] = v;
+    }
+    out[r * 4 + 3] += a[r * 4 + 3];
+  }
+  return out;
+}
+
+Vec3 apply_rigid(const Mat34& m, const Vec3& x) {
+  Vec3 y{};
+  for (size_t i = 0; i < 3; ++i) y[i] = m[i * 4] * x[0] + m[i * 4 + 1] * x[1] + m[i * 4 + 2] * x[2] + m[i * 4 + 3];
+  return y;
 }
 
 std::array<double, 6> motion_at(const float* rows, int frames, double t) {
@@ -177,36 +200,28 @@ Vec3 motion_pivot(const float* rows, int frames) {
   return q;
 }
 
-std::array<double, 12> motion_matrix(const float* rows, int frames, double t) {
+Mat34 motion_matrix(const float* rows, int frames, double t) {
   const std::array<double, 6> m = motion_at(rows, frames, t);
-  const Mat3 R = motion_rotation({m[0], m[1], m[2]});
+  const Mat3 R = euler_xyz_to_matrix({m[0], m[1], m[2]});
   const Vec3 q = motion_pivot(rows, frames);
-  std::array<double, 12> x{};
-  for (int i = 0; i < 3; ++i) {
+  Mat34 x{};
+  for (size_t i = 0; i < 3; ++i) {
     double rt = 0;
-    for (int k = 0; k < 3; ++k) {
-      x[static_cast<size_t>(i * 4 + k)] = R[static_cast<size_t>(i * 3 + k)];
-      rt += R[static_cast<size_t>(i * 3 + k)] * m[static_cast<size_t>(3 + k)];
+    for (size_t k = 0; k < 3; ++k) {
+      x[i * 4 + k] = R[i * 3 + k];
+      rt += R[i * 3 + k] * m[3 + k];
     }
-    x[static_cast<size_t>(i * 4 + 3)] = q[static_cast<size_t>(i)] - rt;
+    x[i * 4 + 3] = q[i] - rt;
   }
   return x;
 }
 
 Vec3 motion_to_canonical(const float* rows, int frames, double t, const Vec3& x) {
-  const std::array<double, 12> m = motion_matrix(rows, frames, t);
-  Vec3 y{};
-  for (size_t i = 0; i < 3; ++i) y[i] = m[i * 4] * x[0] + m[i * 4 + 1] * x[1] + m[i * 4 + 2] * x[2] + m[i * 4 + 3];
-  return y;
+  return apply_rigid(motion_matrix(rows, frames, t), x);
 }
 
 Vec3 motion_from_canonical(const float* rows, int frames, double t, const Vec3& y) {
-  const std::array<double, 12> m = motion_matrix(rows, frames, t);
-  // x = R^T (y - (q - R tau))
-  Vec3 d{}, x{};
-  for (size_t i = 0; i < 3; ++i) d[i] = y[i] - m[i * 4 + 3];
-  for (size_t i = 0; i < 3; ++i) x[i] = m[i] * d[0] + m[4 + i] * d[1] + m[8 + i] * d[2];
-  return x;
+  return apply_rigid(invert_rigid(motion_matrix(rows, frames, t)), y);
 }
 
 }  // namespace nova

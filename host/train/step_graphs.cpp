@@ -126,9 +126,8 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->pack_objects = new_select(c.occupancy, object_grids(K));
   Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
   if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
-  Tensor motion;
-  if (field.motion == ObjectMotion::Rigid) motion = motion_parameter(g, K, motion_options(geo).frames);
-  Tensor raw_objects = object_raw(smp.positions[1], s->times, field, geo, s->pack_objects, motion);
+  if (field.motion == ObjectMotion::Rigid) s->motion = motion_parameter(g, K, motion_options(geo).frames);
+  Tensor raw_objects = object_raw(smp.positions[1], s->times, field, geo, s->pack_objects, s->motion);
   Tensor raw = stack({raw_static, raw_objects});
   const RenderOptions ro = joint_render_options(c.conventions, c.weights);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);
@@ -142,8 +141,8 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->loss = with_distortion_term(*s, c, raw, smp, s->target_masks,
                                  with_depth_term(*s, c, geo, out.depth, l.total, slice));
   s->loss = with_free_space_term(*s, c, geo, raw, smp, out.depth, s->loss, slice);
-  if (motion.valid() && c.w_motion_smooth > 0.0f) {
-    Tensor m = motion_smoothness(motion, motion_options(geo).frames);
+  if (s->motion.valid() && c.w_motion_smooth > 0.0f) {
+    Tensor m = motion_smoothness(s->motion, motion_options(geo).frames);
     s->terms.emplace_back("motion_smooth", m);
     s->loss = weighted_sum({s->loss, m}, {1.0f, c.w_motion_smooth});
   }

@@ -181,11 +181,10 @@ void Trainer::ensure_phase() {
   auto e = std::make_unique<Executor>(rt_, g->graph, eo);
   if (exec_) copy_parameters(*e, *exec_, kStaticPrefix);
   // Rigid objects start where their masks and the disparity put them, placed by the static
-  // NeRF that pretraining made (a resume then loads the trained motion over it).
-  if (joint && config_.field.motion == ObjectMotion::Rigid)
-    for (Tensor p : g->graph.parameters())
-      if (p.info().name == "objects.motion")
-        e->set(p, initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e));
+  // NeRF that pretraining made: at the joint phase's first step only (a resume loads the
+  // trained motion instead).
+  if (g->motion.valid() && step_ == config_.pretrain_steps)
+    e->set(g->motion, initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e));
   exec_.reset();
   graph_ = std::move(g);
   exec_ = std::move(e);

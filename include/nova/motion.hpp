@@ -52,22 +52,29 @@ Tensor motion_smoothness(Tensor motion, int frames);
 // compositor and the initialisation use) ----
 
 using Vec3 = std::array<double, 3>;
-using Mat3 = std::array<double, 9>;  // row-major
+using Mat3 = std::array<double, 9>;    // row-major
+using Mat34 = std::array<double, 12>;  // row-major [R | t]: x -> R x + t
 
-// R = Rz(a[2]) Ry(a[1]) Rx(a[0]).
-Mat3 motion_rotation(const Vec3& angles);
+// R = Rz(a[2]) Ry(a[1]) Rx(a[0]), angles in radians (the composition spec's rotate= in degrees
+// is the same convention: euler_xyz_deg_to_matrix).
+Mat3 euler_xyz_to_matrix(const Vec3& angles);
+
+// Rigid 3x4 maps: the inverse [R^T | -R^T t], a after b (x -> a(b(x))), and a point moved.
+Mat34 invert_rigid(const Mat34& m);
+Mat34 compose_rigid(const Mat34& a, const Mat34& b);
+Vec3 apply_rigid(const Mat34& m, const Vec3& x);
 
 // The 6 motion numbers of one object at time t from its [F, 6] rows (row-major floats).
 std::array<double, 6> motion_at(const float* rows, int frames, double t);
 // The pivot q of the same rows: the mean of their translations.
 Vec3 motion_pivot(const float* rows, int frames);
 
+// The world -> canonical map at time t (R | q - R tau): what a composition instance composes
+// with its placement.
+Mat34 motion_matrix(const float* rows, int frames, double t);
+
 // World point x at time t -> canonical (y = R (x - tau) + q), and back.
 Vec3 motion_to_canonical(const float* rows, int frames, double t, const Vec3& x);
 Vec3 motion_from_canonical(const float* rows, int frames, double t, const Vec3& y);
-
-// A 3x4 world -> canonical map at time t, row-major (R | q - R tau): what a composition
-// instance composes with its placement.
-std::array<double, 12> motion_matrix(const float* rows, int frames, double t);
 
 }  // namespace nova

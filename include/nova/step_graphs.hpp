@@ -32,6 +32,9 @@ struct StepGraph {
   Tensor target_depth, depth_valid;
   // [N, R, 3] each NeRF's own target colour: only under LossConventions::nerf_rgb_area.
   Tensor target_nerf_rgb;
+  // The objects' rigid trajectories (motion.hpp) when the field has them: a parameter the
+  // trainer sets from the masks on entering the joint phase.
+  Tensor motion;
   Tensor loss;
   std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
   Tensor psnr_mse;  // the composite-colour mse the progress PSNR is computed from
