@@ -60,7 +60,7 @@ class HashEncodingOp final : public Op {
     return position_grad_ ? inputs() : std::vector<TensorId>{inputs()[0]};
   }
 
-  // Runs before the table gradient, which may share nothing with it but reads dy too.
+  // The positions' gradient, for samples moved by a learned motion (motion.hpp).
   void backward_positions(ExecContext& ctx) {
     cl_mem dy = ctx.grad_out(0), dp = ctx.grad_in(0);
     const size_t rows = ctx.in_rows(0, rows_);
