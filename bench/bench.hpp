@@ -20,6 +20,7 @@ int view(const Args& args);      // needs nova_io (the run's scene)
 int accuracy(const Args& args);  // needs nova_io (scenes, metrics, pictures)
 int step(const Args& args);      // needs nova_io (the scene)
 int devices(const Args& args);   // needs nova_io (the scene, its evaluation, the plot)
+int masks(const Args& args);     // needs nova_io (nova masks against known masks)
 #endif
 
 struct Benchmark {

@@ -22,6 +22,7 @@ const std::vector<Benchmark>& benchmarks() {
       {"accuracy", "trains and evaluates a list of scenes (sets dev, test, real) with one configuration: PSNR / SSIM / time per scene and set (table, CSV, JSON, PNG)", accuracy},
       {"devices", "every OpenCL device side by side: MLP speed and error against float64, a short training's speed and PSNR (table, CSV, JSON, PNG)", devices},
       {"step", "training steps per preset, phase and object count: s/step, rays/s, device memory, peak RSS, per-op tables", step},
+      {"masks", "nova masks against known masks (the synthetic family's exact ones, a scene's own): IoU per frame", masks},
       {"view", "renders a trained run's views with early ray termination on and off: time ratio, evaluations saved", view},
 #endif
   };

@@ -1,6 +1,6 @@
 # The include graph follows the module layering (docs/architecture.md, "Layers"):
 #
-#   runtime < tuning < graph < ops < nerf < train < metrics < io < data < render < cli
+#   runtime < tuning < graph < ops < nerf < train < metrics < io < data < masks < render < cli
 #
 # A file may include headers of its own module and of the modules before it. runtime to train
 # is the core (nova_core); metrics, io, data and render are the I/O modules (nova_io, OpenCV),
@@ -22,7 +22,7 @@
 # cmake -DSOURCE_DIR=<repository> -P include_layers.cmake
 cmake_minimum_required(VERSION 3.20)
 set(core runtime tuning graph ops nerf train)
-set(io_modules metrics io data render)
+set(io_modules metrics io data masks render)
 set(layers ${core} ${io_modules} cli)
 
 set(owner_camera ops)              # plain data: the camera rays.hpp generates rays of

@@ -12,6 +12,7 @@ int devices(const Args& args);
 int train_mlp(const Args& args);
 int scene(const Args& args);
 int synth(const Args& args);
+int masks(const Args& args);
 int train(const Args& args);
 int render(const Args& args);
 int eval(const Args& args);

@@ -17,6 +17,7 @@ const std::vector<Command>& commands() {
        train_mlp},
       {"scene", "load a scene folder and print its summary and load time", scene},
       {"synth", "write a synthetic NOVA scene with ground truth", synth},
+      {"masks", "find what moves in a video: motion masks from frames, poses and disparity", masks},
       {"train", "train a NOVA scene (static pretraining, then joint with augmentation)", train},
       {"render", "render a trained run: any camera, any time, compositions of objects", render},
       {"eval", "PSNR and SSIM of a trained run against the scene's ground truth", eval},

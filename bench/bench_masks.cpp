@@ -1,0 +1,156 @@
+// `nova-bench masks`: nova masks (include/nova/io/motion_masks.hpp) against known masks: the
+// synthetic family's exact object masks (seeds) and a scene's own masks folder (--truth).
+// Per scene the IoU of the objects' union per frame (mean and worst frame), the object count
+// and the seconds; the settings are the MotionMaskOptions fields, so that dev seeds can choose them.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "bench.hpp"
+#include "options.hpp"
+#include "data/fs_util.hpp"
+#include "nova/error.hpp"
+#include "nova/io/image_io.hpp"
+#include "nova/io/motion_masks.hpp"
+#include "nova/io/scene_io.hpp"
+#include "nova/io/synth.hpp"
+
+namespace nova::bench {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The union of a masks folder's objects per frame: numbered folders 1..K, or PNGs in it.
+std::vector<Image8> truth_union(const fs::path& dir, int width, int height) {
+  const auto sub = data::numbered_subdirs(dir);
+  std::vector<fs::path> folders;
+  for (const auto& [k, p] : sub)
+    if (k > 0) folders.push_back(p);
+  if (sub.empty()) folders.push_back(dir);
+  std::vector<Image8> out;
+  for (const auto& folder : folders) {
+    const auto files = data::list_files(folder, {".png"});
+    if (out.empty()) out.assign(files.size(), Image8(width, height, 1));
+    if (files.size() != out.size()) throw Error(folder.string() + ": another number of masks than folder 1");
+    for (size_t i = 0; i < files.size(); ++i) {
+      const Image8 m = resize_nearest(read_mask(files[i].string()), width, height);
+      for (size_t p = 0; p < m.data.size(); ++p)
+        if (m.data[p]) out[i].data[p] = 255;
+    }
+  }
+  return out;
+}
+
+struct Score {
+  std::string name;
+  int frames = 0, objects = 0, true_objects = 0;
+  double mean = 0, worst = 1, seconds = 0;
+};
+
+Score score(const std::string& name, const Scene& scene, const std::vector<Image8>& truth,
+            const MotionMaskOptions& opt, int true_objects) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const MotionMasks m = make_motion_masks(scene, opt);
+  Score s;
+  s.name = name;
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  s.frames = int(scene.frames.size());
+  s.objects = m.nothing_moves ? 0 : m.objects();
+  s.true_objects = true_objects;
+  if (truth.size() != scene.frames.size()) throw Error(name + ": " + std::to_string(truth.size()) + " true masks for " +
+                                                       std::to_string(scene.frames.size()) + " frames");
+  std::string per;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    std::vector<Image8> frame_masks;
+    for (const auto& k : m.masks) frame_masks.push_back(k[i]);
+    const double iou = mask_iou(objects_union(frame_masks), truth[i]);
+    s.mean += iou / double(truth.size());
+    s.worst = std::min(s.worst, iou);
+    char b[16];
+    std::snprintf(b, sizeof b, " %.2f", iou);
+    per += b;
+  }
+  std::cout << name << ": per frame" << per << "\n";
+  return s;
+}
+
+}  // namespace
+
+int masks(const Args& args) {
+  MotionMaskOptions opt;
+  auto text = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  const Options o(args, {{"seeds", ""},
+                         {"scene", ""},
+                         {"truth", ""},
+                         {"factor", "0"},
+                         {"offsets", "1,2,3"},
+                         {"colour-scale", text(opt.colour_scale)},
+                         {"depth-scale", text(opt.depth_scale)},
+                         {"occlusion-margin", text(opt.occlusion_margin)},
+                         {"threshold-floor", text(opt.threshold_floor)},
+                         {"threshold-mads", text(opt.threshold_mads)},
+                         {"min-area", text(opt.min_area)},
+                         {"global-fit", "off"},
+                         {"no-grabcut", "off"}});
+  if (o.help()) {
+    std::cout << o.usage("masks") << "\n--seeds: family seeds; --scene DIR [--truth DIR] [--factor F]: a NOVA "
+                 "scene and its true masks folder (default SCENE/motion_masks); the rest: MotionMaskOptions\n";
+    return 0;
+  }
+  opt.offsets.clear();
+  for (long v : o.integers("offsets")) opt.offsets.push_back(int(v));
+  opt.colour_scale = std::stod(o.str("colour-scale"));
+  opt.depth_scale = std::stod(o.str("depth-scale"));
+  opt.occlusion_margin = std::stod(o.str("occlusion-margin"));
+  opt.threshold_floor = std::stod(o.str("threshold-floor"));
+  opt.threshold_mads = std::stod(o.str("threshold-mads"));
+  opt.min_area = std::stod(o.str("min-area"));
+  opt.per_frame_fit = !o.flag("global-fit");
+  opt.grabcut = !o.flag("no-grabcut");
+  std::vector<Score> scores;
+  ScratchDir scratch("masks");
+  for (long seed : o.integers("seeds")) {
+    const fs::path dir = scratch / ("family" + std::to_string(seed));
+    write_synthetic_scene(dir.string(), "family", uint32_t(seed));
+    LoadOptions load;
+    load.static_only = true;
+    load.load_gt = false;
+    const Scene scene = load_scene(dir.string(), load);
+    const SynthWorld world("family", uint32_t(seed));
+    std::vector<Image8> truth;
+    const int n = int(scene.frames.size());
+    for (int i = 0; i < n; ++i) truth.push_back(objects_union(world.render(world.camera(i), frame_time(i, n)).masks));
+    scores.push_back(score("family seed " + std::to_string(seed), scene, truth, opt, world.objects()));
+  }
+  if (!o.str("scene").empty()) {
+    const std::string dir = o.str("scene");
+    LoadOptions load;
+    load.format = "nova";
+    load.static_only = true;
+    load.load_gt = false;
+    load.factor = int(o.integer("factor"));
+    const Scene scene = load_scene(dir, load);
+    std::string truth_dir = o.str("truth");
+    if (truth_dir.empty()) truth_dir = (fs::path(dir) / "motion_masks").string();
+    const auto& f = scene.frames[0].rgb;
+    const auto truth = truth_union(truth_dir, f.width, f.height);
+    scores.push_back(score(scene.name, scene, truth, opt, int(data::numbered_subdirs(truth_dir).size()) - 1));
+  }
+  std::printf("\n%-18s %6s %8s %8s %8s %8s\n", "scene", "frames", "objects", "IoU", "worst", "seconds");
+  double sum = 0;
+  for (const Score& s : scores) {
+    std::printf("%-18s %6d %4d/%-3d %8.3f %8.3f %8.1f\n", s.name.c_str(), s.frames, s.objects, s.true_objects, s.mean,
+                s.worst, s.seconds);
+    sum += s.mean;
+  }
+  if (scores.size() > 1) std::printf("%-18s %6s %8s %8.3f\n", "mean", "", "", sum / double(scores.size()));
+  return 0;
+}
+
+}  // namespace nova::bench

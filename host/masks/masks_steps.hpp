@@ -1,0 +1,78 @@
+#pragma once
+// The steps of make_motion_masks (include/nova/io/motion_masks.hpp), one file each:
+// reprojection.cpp (frames as float images, the pair geometry), depth_fit.cpp, motion_score.cpp,
+// segment.cpp (threshold, clean-up, GrabCut) and tracks.cpp (objects through time).
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "nova/io/motion_masks.hpp"
+
+namespace nova::masks {
+
+// A frame as the steps use it: colour as float (each channel divided by twice its frame mean,
+// so a global exposure change cancels), the same blurred for the depth fit, the disparity and,
+// once fitted, the inverse depth.
+struct FrameData {
+  cv::Mat rgb;       // CV_32FC3
+  cv::Mat rgb_blur;  // CV_32FC3, Gaussian sigma 1.5
+  cv::Mat disp;      // CV_32F
+  cv::Mat inv_depth; // CV_32F, after the fit
+  Camera camera;
+};
+std::vector<FrameData> prepare_frames(const Scene& scene);
+
+// Camera a's pixel at inverse depth w, seen from camera b. Precomputed per pair: the rotation
+// M = Rb^T Ra and offset T = Rb^T (ta - tb), so that the point in b's frame is
+// (M dir + w T) / w with dir = ((x - cx) / fx, -(y - cy) / fy, -1) (camera.hpp's convention).
+struct PairGeometry {
+  double m[9], t[3];
+  double fxa, fya, cxa, cya, fxb, fyb, cxb, cyb;
+};
+PairGeometry pair_geometry(const Camera& a, const Camera& b);
+
+// Where pixel (x, y) of camera a at inverse depth w > 0 lands in camera b, and its inverse
+// depth there; false when it lands behind b.
+inline bool reproject(const PairGeometry& g, double x, double y, double w, double& bx, double& by,
+                      double& bw) {
+  const double dx = (x - g.cxa) / g.fxa, dy = -(y - g.cya) / g.fya, dz = -1.0;
+  const double qx = g.m[0] * dx + g.m[1] * dy + g.m[2] * dz + w * g.t[0];
+  const double qy = g.m[3] * dx + g.m[4] * dy + g.m[5] * dz + w * g.t[1];
+  const double qz = g.m[6] * dx + g.m[7] * dy + g.m[8] * dz + w * g.t[2];
+  const double z = -qz;  // depth in b times w
+  if (z <= 1e-9) return false;
+  bx = g.cxb + g.fxb * qx / z;
+  by = g.cyb - g.fyb * qy / z;
+  bw = w / z;
+  return true;
+}
+
+// Bilinear sample of a float image with c channels at (x, y); false outside [0, w-1] x [0, h-1].
+bool sample_bilinear(const cv::Mat& image, double x, double y, float* out);
+
+// The neighbours of frame i: i - o and i + o for each offset that stays inside [0, n).
+std::vector<int> neighbours(int i, int n, const std::vector<int>& offsets);
+
+DepthFit fit_depth(std::vector<FrameData>& frames, double near, const MotionMaskOptions& options);
+// inv_depth of every frame from its disparity and the fit.
+void apply_depth(std::vector<FrameData>& frames, const DepthFit& fit);
+
+// The raw per-pixel motion score of frame i (CV_32F).
+cv::Mat motion_score(const std::vector<FrameData>& frames, int i, const MotionMaskOptions& options);
+
+// The threshold from the smoothed scores of all frames.
+double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptions& options,
+                       std::vector<std::string>& notes);
+// The moving region of one frame (CV_8U, 255 inside): threshold, clean-up, GrabCut.
+cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame,
+                      const MotionMaskOptions& options);
+// Drops connected regions under `min_pixels` and fills enclosed holes (CV_8U, 255 inside).
+cv::Mat clean_region(const cv::Mat& region, int min_pixels);
+
+// Splits the moving regions of all frames into objects tracked through time: [object][frame],
+// CV_8U 255 inside; empty when nothing persists.
+std::vector<std::vector<cv::Mat>> track_objects(const std::vector<cv::Mat>& regions,
+                                                const MotionMaskOptions& options,
+                                                std::vector<std::string>& notes);
+
+}  // namespace nova::masks

@@ -1,0 +1,86 @@
+// From scores to moving regions (masks_steps.hpp): the threshold from the scores' own
+// distribution, clean-up, and GrabCut to move the edges onto the image's colour edges.
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "masks/masks_steps.hpp"
+
+namespace nova::masks {
+
+double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptions& options,
+                       std::vector<std::string>& notes) {
+  std::vector<float> all;
+  for (const cv::Mat& s : scores) all.insert(all.end(), s.begin<float>(), s.end<float>());
+  if (all.empty()) return options.threshold_floor;
+  auto median = [](std::vector<float>& v) {
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return double(v[v.size() / 2]);
+  };
+  const double m = median(all);
+  for (float& v : all) v = float(std::abs(v - m));
+  const double sigma = 1.4826 * median(all);  // the MAD as a normal's standard deviation
+  const double noise = m + options.threshold_mads * sigma;
+  const double t = std::max(options.threshold_floor, noise);
+  std::ostringstream s;
+  s << "score: median " << m << ", MAD sigma " << sigma << "; threshold " << t
+    << (t == options.threshold_floor ? " (the floor)" : " (median + " + std::to_string(int(options.threshold_mads)) + " sigma)");
+  notes.push_back(s.str());
+  return t;
+}
+
+cv::Mat clean_region(const cv::Mat& region, int min_pixels) {
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(region, labels, stats, centroids, 8, CV_32S);
+  cv::Mat out(region.size(), CV_8U, cv::Scalar(0));
+  for (int k = 1; k < n; ++k)
+    if (stats.at<int>(k, cv::CC_STAT_AREA) >= min_pixels) out.setTo(255, labels == k);
+  // Holes: background pixels not connected to the image border.
+  cv::Mat outside;
+  cv::copyMakeBorder(out, outside, 1, 1, 1, 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::floodFill(outside, cv::Point(0, 0), cv::Scalar(128));
+  const cv::Mat inner = outside(cv::Rect(1, 1, out.cols, out.rows));
+  out.setTo(255, inner == 0);
+  return out;
+}
+
+cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame,
+                      const MotionMaskOptions& options) {
+  const int min_pixels = std::max(4, int(options.min_area * score.total()));
+  cv::Mat region = score > threshold;
+  const cv::Mat k3 = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(3, 3));
+  const cv::Mat k5 = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
+  cv::morphologyEx(region, region, cv::MORPH_OPEN, k3);
+  cv::morphologyEx(region, region, cv::MORPH_CLOSE, k5);
+  region = clean_region(region, min_pixels);
+  if (!options.grabcut || cv::countNonZero(region) == 0) return region;
+
+  // GrabCut inside a band around the region: sure background beyond it, probable background in
+  // it, probable foreground in the region, sure foreground where the score is high well inside.
+  const int band = std::max(6, int(0.04 * std::min(score.cols, score.rows)));
+  cv::Mat near_region;
+  cv::dilate(region, near_region, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * band + 1, 2 * band + 1)));
+  cv::Mat inner;
+  cv::erode(region, inner, k5);
+  cv::Mat sure = inner & (score > 2 * threshold);
+  cv::Mat gc(score.size(), CV_8U, cv::Scalar(cv::GC_BGD));
+  gc.setTo(cv::GC_PR_BGD, near_region);
+  gc.setTo(cv::GC_PR_FGD, region);
+  gc.setTo(cv::GC_FGD, sure);
+  const cv::Rect roi = cv::boundingRect(near_region);
+  const cv::Mat bgr = [&] {
+    cv::Mat rgb(frame.height, frame.width, CV_8UC3, const_cast<uint8_t*>(frame.data.data())), out;
+    cv::cvtColor(rgb, out, cv::COLOR_RGB2BGR);
+    return out;
+  }();
+  cv::Mat gc_roi = gc(roi).clone(), bgd, fgd;
+  if (cv::countNonZero(gc_roi == cv::GC_BGD) + cv::countNonZero(gc_roi == cv::GC_PR_BGD) < 16) return region;
+  cv::grabCut(bgr(roi), gc_roi, cv::Rect(), bgd, fgd, 3, cv::GC_INIT_WITH_MASK);
+  gc_roi.copyTo(gc(roi));
+  cv::Mat out = (gc == cv::GC_FGD) | (gc == cv::GC_PR_FGD);
+  cv::morphologyEx(out, out, cv::MORPH_OPEN, k3);
+  return clean_region(out, min_pixels);
+}
+
+}  // namespace nova::masks
