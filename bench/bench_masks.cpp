@@ -50,9 +50,10 @@ struct Score {
 };
 
 Score score(const std::string& name, const Scene& scene, const std::vector<Image8>& truth,
-            const MotionMaskOptions& opt, int true_objects) {
+            const MotionMaskOptions& opt, int true_objects, const std::string& out) {
   const auto t0 = std::chrono::steady_clock::now();
   const MotionMasks m = make_motion_masks(scene, opt);
+  if (!out.empty()) write_motion_masks(scene, m, out + "/" + scene.name, true);
   Score s;
   s.name = name;
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -96,7 +97,10 @@ int masks(const Args& args) {
                          {"threshold-floor", text(opt.threshold_floor)},
                          {"threshold-mads", text(opt.threshold_mads)},
                          {"min-area", text(opt.min_area)},
+                         {"depth-search", text(opt.depth_search)},
+                         {"grow-depth", text(opt.grow_depth)},
                          {"global-fit", "off"},
+                         {"out", ""},
                          {"no-grabcut", "off"}});
   if (o.help()) {
     std::cout << o.usage("masks") << "\n--seeds: family seeds; --scene DIR [--truth DIR] [--factor F]: a NOVA "
@@ -111,6 +115,8 @@ int masks(const Args& args) {
   opt.threshold_floor = std::stod(o.str("threshold-floor"));
   opt.threshold_mads = std::stod(o.str("threshold-mads"));
   opt.min_area = std::stod(o.str("min-area"));
+  opt.depth_search = std::stod(o.str("depth-search"));
+  opt.grow_depth = std::stod(o.str("grow-depth"));
   opt.per_frame_fit = !o.flag("global-fit");
   opt.grabcut = !o.flag("no-grabcut");
   std::vector<Score> scores;
@@ -126,7 +132,7 @@ int masks(const Args& args) {
     std::vector<Image8> truth;
     const int n = int(scene.frames.size());
     for (int i = 0; i < n; ++i) truth.push_back(objects_union(world.render(world.camera(i), frame_time(i, n)).masks));
-    scores.push_back(score("family seed " + std::to_string(seed), scene, truth, opt, world.objects()));
+    scores.push_back(score("family seed " + std::to_string(seed), scene, truth, opt, world.objects(), o.str("out")));
   }
   if (!o.str("scene").empty()) {
     const std::string dir = o.str("scene");
@@ -140,7 +146,7 @@ int masks(const Args& args) {
     if (truth_dir.empty()) truth_dir = (fs::path(dir) / "motion_masks").string();
     const auto& f = scene.frames[0].rgb;
     const auto truth = truth_union(truth_dir, f.width, f.height);
-    scores.push_back(score(scene.name, scene, truth, opt, int(data::numbered_subdirs(truth_dir).size()) - 1));
+    scores.push_back(score(scene.name, scene, truth, opt, int(data::numbered_subdirs(truth_dir).size()) - 1, o.str("out")));
   }
   std::printf("\n%-18s %6s %8s %8s %8s %8s\n", "scene", "frames", "objects", "IoU", "worst", "seconds");
   double sum = 0;

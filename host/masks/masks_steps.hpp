@@ -63,9 +63,11 @@ cv::Mat motion_score(const std::vector<FrameData>& frames, int i, const MotionMa
 // The threshold from the smoothed scores of all frames.
 double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptions& options,
                        std::vector<std::string>& notes);
-// The moving region of one frame (CV_8U, 255 inside): threshold, clean-up, GrabCut.
-cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame,
+// The moving region of one frame (CV_8U, 255 inside): threshold, clean-up, growth over the
+// depth's smooth surfaces (options.grow_depth), GrabCut.
+cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame, const cv::Mat& inv_depth,
                       const MotionMaskOptions& options);
+cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step);
 // Drops connected regions under `min_pixels` and fills enclosed holes (CV_8U, 255 inside).
 cv::Mat clean_region(const cv::Mat& region, int min_pixels);
 

@@ -45,7 +45,39 @@ cv::Mat clean_region(const cv::Mat& region, int min_pixels) {
   return out;
 }
 
-cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame,
+cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step) {
+  // The moving region's surfaces: from its pixels to 4-neighbours whose inverse depth differs by
+  // less than `step` (relative), and that lie no farther than the region's 10th percentile
+  // inverse depth minus 10 %, so that a slow ramp cannot lead onto the background behind.
+  std::vector<float> ws;
+  for (int y = 0; y < region.rows; ++y)
+    for (int x = 0; x < region.cols; ++x)
+      if (region.at<uint8_t>(y, x)) ws.push_back(inv_depth.at<float>(y, x));
+  if (ws.empty()) return region;
+  std::nth_element(ws.begin(), ws.begin() + long(ws.size() / 10), ws.end());
+  const float floor_w = ws[ws.size() / 10] * 0.9f;
+  cv::Mat out = region.clone();
+  std::vector<cv::Point> queue;
+  for (int y = 0; y < region.rows; ++y)
+    for (int x = 0; x < region.cols; ++x)
+      if (region.at<uint8_t>(y, x)) queue.push_back({x, y});
+  while (!queue.empty()) {
+    const cv::Point p = queue.back();
+    queue.pop_back();
+    const float wp = inv_depth.at<float>(p);
+    for (const cv::Point d : {cv::Point(1, 0), cv::Point(-1, 0), cv::Point(0, 1), cv::Point(0, -1)}) {
+      const cv::Point q = p + d;
+      if (q.x < 0 || q.y < 0 || q.x >= out.cols || q.y >= out.rows || out.at<uint8_t>(q)) continue;
+      const float wq = inv_depth.at<float>(q);
+      if (wq < floor_w || std::abs(wq - wp) > step * wp) continue;
+      out.at<uint8_t>(q) = 255;
+      queue.push_back(q);
+    }
+  }
+  return out;
+}
+
+cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame, const cv::Mat& inv_depth,
                       const MotionMaskOptions& options) {
   const int min_pixels = std::max(4, int(options.min_area * score.total()));
   cv::Mat region = score > threshold;
@@ -54,6 +86,7 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
   cv::morphologyEx(region, region, cv::MORPH_OPEN, k3);
   cv::morphologyEx(region, region, cv::MORPH_CLOSE, k5);
   region = clean_region(region, min_pixels);
+  if (options.grow_depth > 0) region = grow_on_depth(region, inv_depth, options.grow_depth);
   if (!options.grabcut || cv::countNonZero(region) == 0) return region;
 
   // GrabCut inside a band around the region: sure background beyond it, probable background in

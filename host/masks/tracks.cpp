@@ -39,7 +39,7 @@ std::vector<std::vector<cv::Mat>> track_objects(const std::vector<cv::Mat>& regi
       const cv::Mat comp = labels == k;
       int best = -1, best_overlap = 0;
       for (size_t t = 0; t < tracks.size(); ++t) {
-        if (tracks[t].last_frame < i - 2) continue;  // lost for more than one frame
+        if (tracks[t].last.empty() || tracks[t].last_frame < i - 2) continue;  // new, or lost for more than one frame
         const int overlap = cv::countNonZero(comp & tracks[t].last);
         if (overlap > best_overlap) best = int(t), best_overlap = overlap;
       }

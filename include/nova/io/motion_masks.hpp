@@ -33,8 +33,11 @@ struct MotionMaskOptions {
   double colour_scale = 0.08;            // mean absolute colour error (0..1) that scores 1
   double depth_scale = 0.10;             // relative inverse-depth deficit that scores 1
   double occlusion_margin = 0.05;        // relative: a neighbour nearer by more occludes
-  double threshold_floor = 1.0;          // the threshold is never below this score
+  double depth_search = 0.1;             // relative: inverse depths tried around the fitted one
+  int depth_search_steps = 3;            // on either side
+  double threshold_floor = 0.5;          // the threshold is never below this score
   double threshold_mads = 6.0;           // robust noise level: median + this many MAD sigmas
+  double grow_depth = 0.0;               // relative inverse-depth step the region grows over (0: off)
   double min_area = 0.002;               // regions smaller than this fraction of a frame drop
   double min_track_frames = 0.25;        // a track is an object in this fraction of frames
   bool grabcut = true;                   // refine edges on the image
