@@ -109,6 +109,9 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
   }();
   cv::Mat gc_roi = gc(roi).clone(), bgd, fgd;
   if (cv::countNonZero(gc_roi == cv::GC_BGD) + cv::countNonZero(gc_roi == cv::GC_PR_BGD) < 16) return region;
+  // GrabCut's k-means draws from OpenCV's thread RNG: a fixed state per frame gives the same
+  // masks whatever ran before.
+  cv::theRNG().state = 0x6e6f7661;
   cv::grabCut(bgr(roi), gc_roi, cv::Rect(), bgd, fgd, 3, cv::GC_INIT_WITH_MASK);
   gc_roi.copyTo(gc(roi));
   cv::Mat out = (gc == cv::GC_FGD) | (gc == cv::GC_PR_FGD);
