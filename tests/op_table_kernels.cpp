@@ -57,6 +57,29 @@ BOOST_AUTO_TEST_CASE(optimiser) {
   expect_close(got, want, 1e-6 * lr, 1e-5, "adam");
 }
 
+// optim.cl: a range of the parameters at a quarter of the rate (Adam::scale_range), one step
+// from zero moments: the first step moves each parameter by -rate * sign(g) (PyTorch's
+// formulation, float64), so inside the range a quarter as far. Tolerance as above.
+BOOST_AUTO_TEST_CASE(optimiser_scaled_range) {
+  Runtime& r = rt();
+  const auto p = random_floats(kRows, -1, 1, 144), g = random_floats(kRows, -1, 1, 145);
+  Buffer params = r.upload_floats(p), grads = r.upload_floats(g);
+  AdamConfig c;
+  Adam adam(r, kRows, c);
+  const size_t first = 100, count = 300;
+  adam.scale_range(first, count, 0.25f);
+  const float lr = 1e-2f;
+  adam.step(params.get(), grads.get(), lr);
+  const auto got = r.download_floats(params.get(), kRows);
+  std::vector<double> want(kRows);
+  for (size_t i = 0; i < kRows; ++i) {
+    const double rate = i >= first && i < first + count ? 0.25 * lr : lr, gi = g[i];
+    want[i] = p[i] - rate * gi / (std::fabs(gi) + c.eps);
+  }
+  expect_close(got, want, 1e-6 * lr, 1e-5, "adam, scaled range");
+  BOOST_CHECK_THROW(adam.scale_range(kRows - 10, 11, 0.5f), Error);
+}
+
 // gemm.cl (the opt-in provider NOVA_GEMM=kernels): gemm_nn (1009 x 21 = A[1009, 5] B),
 // gemm_tn (A^T B, 3 batches of 13 x 1009) and gemm_transpose + gemm_nn (A B^T, 3 batches of
 // 11 x 999), with alpha and beta != 0, against float64 products; the same three through the

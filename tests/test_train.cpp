@@ -173,7 +173,9 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
 
 // A rigid object starts where its masks are: on entering the joint phase every frame's
 // anchor (the motion's translation) projects into that frame inside the object's mask, and
-// in front of the camera, with no turn.
+// in front of the camera; its first frame is unturned (it fixes the canonical space), and
+// the turn the frames' alignment finds by the last frame is the world's (2.7 and 2.25 rad on
+// this 64 x 48 scene; measured 14 % and 2 % off, bound 30 %: about twice the worst).
 BOOST_AUTO_TEST_CASE(rigid_objects_start_at_their_masks) {
   const Scene scene = tiny_scene();
   TempDir dir("rigid");
@@ -204,8 +206,16 @@ BOOST_AUTO_TEST_CASE(rigid_objects_start_at_their_masks) {
       const Image8& mask = fr.masks[static_cast<size_t>(k)];
       const bool inside = x >= 0 && y >= 0 && x < mask.width && y < mask.height && mask.at(x, y) >= 128;
       BOOST_TEST(inside, "object " << k << " frame " << f << ": anchor at pixel (" << x << ", " << y << ")");
-      for (int a = 0; a < 3; ++a) BOOST_TEST(rows[f * 6 + a] == 0.0f);  // no turn
+      if (f == 0)
+        for (int a = 0; a < 3; ++a) BOOST_TEST(rows[a] == 0.0f);
     }
+    const float* last = rows + static_cast<size_t>(F - 1) * 6;
+    const Mat3 turn = euler_xyz_to_matrix({last[0], last[1], last[2]});
+    const double found = std::acos(std::clamp((turn[0] + turn[4] + turn[8] - 1) / 2, -1.0, 1.0));
+    const SynthWorld world("tiny", 7);
+    const double spin = std::fabs(world.scene().objects[static_cast<size_t>(k - 1)].motion.spin_rate) * (F - 1) / F;
+    BOOST_TEST_MESSAGE("object " << k << ": turn " << found << " rad by the last frame, the world's " << spin);
+    BOOST_TEST(std::fabs(found - spin) < 0.3 * spin);
   }
 }
 

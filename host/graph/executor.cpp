@@ -241,6 +241,7 @@ void Executor::allocate() {
               guard_floats;
   }
   param_arena_floats_ = floats;
+  param_offsets_ = offsets;
   if (floats == 0) return;
   param_arena_ = rt_.alloc(floats * sizeof(float));
   grad_arena_ = rt_.alloc(floats * sizeof(float));
@@ -265,6 +266,12 @@ void Executor::allocate() {
       guards_.push_back({at + bytes, guard, owner, true, arena});
     }
   }
+}
+
+size_t Executor::parameter_offset(Tensor t) const {
+  if (graph_.tensor(t.id).role != TensorRole::Parameter)
+    throw Error("parameter_offset: '" + graph_.tensor(t.id).name + "' is not a parameter", kExitInternal);
+  return param_offsets_.at(t.id);
 }
 
 void Executor::init_parameters(unsigned seed) {

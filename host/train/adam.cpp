@@ -1,5 +1,6 @@
 #include <cmath>
 
+#include "nova/error.hpp"
 #include "nova/optim.hpp"
 
 namespace nova {
@@ -21,7 +22,17 @@ void Adam::step(cl_mem params, cl_mem grads, float lr) {
       .arg(params).arg(grads).arg(m_).arg(v_).arg(static_cast<unsigned>(count_))
       .arg(static_cast<float>(lr / bc1)).arg(config_.beta1).arg(config_.beta2)
       .arg(static_cast<float>(std::sqrt(bc2))).arg(config_.eps)
+      .arg(static_cast<unsigned>(scaled_first_)).arg(static_cast<unsigned>(scaled_end_)).arg(scale_)
       .run(count_);
+}
+
+void Adam::scale_range(size_t first, size_t count, float scale) {
+  if (first + count > count_ || !(scale >= 0.0f))
+    throw Error("Adam: scaled range [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                    ") or scale outside the " + std::to_string(count_) + " parameters", kExitInternal);
+  scaled_first_ = first;
+  scaled_end_ = first + count;
+  scale_ = scale;
 }
 
 }  // namespace nova

@@ -1,17 +1,22 @@
-// The starting trajectory of each rigid object (motion.hpp): per frame, its mask's centroid
-// placed at the object's depth along that frame's camera ray. The depth comes from the
-// disparity, placed in the rendered depth's units by a least-squares fit to the pretrained
-// static NeRF's depth on background pixels (the only depth that is known to be right, up to
-// the fit); without disparity, from the static NeRF's depth behind the mask (the object stands
-// in front of it). The same fallback serves a disparity that does not fit (wrong sign).
+// The starting trajectory of each rigid object (motion.hpp). The disparity is placed in depth
+// by the static background's parallax (disparity_fit.hpp); each frame's object pixels are then
+// points in the scene, and the object's motion from one frame to the next is found by aligning
+// them (motion_alignment.hpp): the first frame that shows the object fixes its canonical
+// space (its mask's centroid at its median depth, unturned), and every later frame is the
+// previous one moved by the alignment. Without a usable disparity (none, or a video without
+// parallax) the objects do not turn: each frame's anchor is the mask's centroid in front of
+// what the static NeRF shows behind it.
 #include "nova/motion_init.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <optional>
 
+#include "nova/camera.hpp"
+#include "nova/disparity_fit.hpp"
 #include "nova/error.hpp"
 #include "nova/executor.hpp"
+#include "nova/motion_alignment.hpp"
 #include "nova/nova_graphs.hpp"
 #include "nova/rays.hpp"
 #include "nova/step_graphs.hpp"
@@ -85,48 +90,37 @@ Vec3 world_point(const Camera& c, double x, double y, double t, bool ndc) {
   return {o[0] + s * d[0], o[1] + s * d[1], o[2] + s * d[2]};
 }
 
+// Camera-space depth of every pixel of `f` from its disparity placed by `fit` (0: unknown).
+ImageF fitted_depth(const Frame& f, const DisparityFit& fit) {
+  ImageF out;
+  out.width = f.disparity.width;
+  out.height = f.disparity.height;
+  out.data.assign(f.disparity.data.size(), 0.0f);
+  for (size_t i = 0; i < out.data.size(); ++i) {
+    const double w = fit.inverse_depth(f.disparity.data[i]);
+    if (w > 0 && std::isfinite(w)) out.data[i] = static_cast<float>(1.0 / w);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
                                   int samples, Executor& trained) {
   const int K = geo.num_objects, F = motion_options(geo).frames;
   if (K < 1) throw Error("initial_motion: the scene has no objects", kExitInternal);
-  std::unique_ptr<ViewGraph> vg = build_view_graph(field, samples, geo, kFitRays, true, 0, false, false);
-  Executor ex(rt, vg->graph);
-  copy_parameters(ex, trained, kStaticPrefix);
-
-  // The static NeRF's depth against the disparity on background pixels: depth = a + b disp.
-  const bool disparity = disparity_usable(geo);
-  double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (const Frame& f : scene.frames) {
-    if (!disparity) break;
-    const Image8& bg = f.masks.at(0);
-    const std::vector<Pixel> px = grid_pixels(f, kFitPixelsPerFrame, [&](int x, int y) { return bg.at(x, y) >= 128; });
-    const std::vector<float> d = static_depth(ex, *vg, f.camera, px);
-    for (size_t j = 0; j < px.size(); ++j) {
-      const double x = f.disparity.data[static_cast<size_t>(px[j].y) * f.disparity.width + px[j].x], y = d[j];
-      if (!std::isfinite(x) || !std::isfinite(y)) continue;
-      sw += 1;
-      sx += x;
-      sy += y;
-      sxx += x * x;
-      sxy += x * y;
-    }
-  }
-  double a = 0, b = 0;
-  bool fitted = false;
-  if (sw > 2) {
-    const double var = sxx - sx * sx / sw;
-    if (var > 0) {
-      b = (sxy - sx * sy / sw) / var;
-      a = (sy - b * sx) / sw;
-      // Nearer is larger disparity and smaller depth: a fit that says otherwise is no fit.
-      fitted = b < 0;
-    }
-  }
+  const DisparityFit fit = geo.disparity ? fit_disparity(scene) : DisparityFit{};
+  const bool fitted = fit.ok;
   // Without a fit: the static NeRF's depth behind the objects' masks.
   std::vector<std::vector<Pixel>> inside(scene.frames.size());
   std::vector<std::vector<float>> behind(scene.frames.size());
+  std::unique_ptr<ViewGraph> vg;
+  std::unique_ptr<Executor> ex;
+  if (!fitted) {
+    vg = build_view_graph(field, samples, geo, kFitRays, true, 0, false, false);
+    ex = std::make_unique<Executor>(rt, vg->graph);
+    copy_parameters(*ex, trained, kStaticPrefix);
+  }
   for (size_t i = 0; i < scene.frames.size() && !fitted; ++i) {
     const Frame& f = scene.frames[i];
     inside[i] = grid_pixels(f, kFitPixelsPerFrame, [&](int x, int y) {
@@ -134,14 +128,20 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
         if (f.masks.at(static_cast<size_t>(k)).at(x, y) >= 128) return true;
       return false;
     });
-    behind[i] = static_depth(ex, *vg, f.camera, inside[i]);
+    behind[i] = static_depth(*ex, *vg, f.camera, inside[i]);
   }
+
+  // Per frame the camera-space depth of every pixel, from the fitted disparity: what the
+  // alignment of an object between frames places its pixels by.
+  std::vector<ImageF> depth(fitted ? scene.frames.size() : 0);
+  for (size_t i = 0; i < depth.size(); ++i) depth[i] = fitted_depth(scene.frames[i], fit);
 
   // Per object, the anchor of every frame that shows it; frames without one take their
   // neighbours' (linear between, the nearest beyond).
   std::vector<float> rows(static_cast<size_t>(K) * F * 6, 0.0f);
   for (int k = 1; k <= K; ++k) {
     std::vector<std::optional<Vec3>> anchor(static_cast<size_t>(F));
+    std::vector<size_t> frame_of(static_cast<size_t>(F));
     for (size_t i = 0; i < scene.frames.size(); ++i) {
       const Frame& f = scene.frames[i];
       const Image8& m = f.masks.at(static_cast<size_t>(k));
@@ -158,38 +158,67 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
       if (n == 0) continue;
       cx /= n;
       cy /= n;
-      double t;
+      const int index = std::clamp(static_cast<int>(std::lround((f.time + 1.0) * 0.5 * F)), 0, F - 1);
+      frame_of[static_cast<size_t>(index)] = i;
       if (fitted) {
-        t = a + b * median(disp);
+        const double w = fit.inverse_depth(median(disp));
+        if (w > 0) anchor[static_cast<size_t>(index)] = camera_unproject(f.camera, cx, cy, 1.0 / w);
       } else {
         std::vector<double> d;
         for (size_t j = 0; j < inside[i].size(); ++j)
           if (m.at(inside[i][j].x, inside[i][j].y) >= 128) d.push_back(behind[i][j]);
         // In front of what the static NeRF shows behind it: its nearer quartile.
         std::sort(d.begin(), d.end());
-        t = d.empty() ? 0.5 * (geo.near + geo.far) : d[d.size() / 4];
+        const double t = std::clamp(d.empty() ? 0.5 * (geo.near + geo.far) : d[d.size() / 4],
+                                    static_cast<double>(geo.near), static_cast<double>(geo.far));
+        anchor[static_cast<size_t>(index)] = world_point(f.camera, cx, cy, t, geo.ndc);
       }
-      t = std::clamp(t, static_cast<double>(geo.near), static_cast<double>(geo.far));
-      const int index = std::clamp(static_cast<int>(std::lround((f.time + 1.0) * 0.5 * F)), 0, F - 1);
-      anchor[static_cast<size_t>(index)] = world_point(f.camera, cx, cy, t, geo.ndc);
     }
     std::vector<int> known;
     for (int i = 0; i < F; ++i)
       if (anchor[static_cast<size_t>(i)]) known.push_back(i);
     if (known.empty()) continue;  // never seen: it stays at the origin
+
+    // The object's pose (object -> world) at every frame that shows it: the first at its
+    // anchor, unturned; each next one the previous moved by the alignment of the two frames
+    // (without depth to place the pixels by, no turn: anchor to anchor).
+    std::vector<std::array<double, 6>> known_rows;
+    Mat34 pose{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    for (int d = 0; d < 3; ++d) pose[static_cast<size_t>(d * 4 + 3)] = (*anchor[static_cast<size_t>(known[0])])[d];
+    Vec3 angles{0, 0, 0};
+    for (size_t j = 0; j < known.size(); ++j) {
+      const size_t g = static_cast<size_t>(known[j]);
+      if (j > 0) {
+        const size_t f = static_cast<size_t>(known[j - 1]);
+        Mat34 step{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+        for (int d = 0; d < 3; ++d) step[static_cast<size_t>(d * 4 + 3)] = (*anchor[g])[d] - (*anchor[f])[d];
+        if (fitted) {
+          const Frame& fa = scene.frames[frame_of[f]];
+          const Frame& fb = scene.frames[frame_of[g]];
+          const ObjectView va{&fa.camera, &fa.rgb, &fa.masks.at(static_cast<size_t>(k)), &depth[frame_of[f]]};
+          const ObjectView vb{&fb.camera, &fb.rgb, &fb.masks.at(static_cast<size_t>(k)), &depth[frame_of[g]]};
+          const Vec3 shift{step[3], step[7], step[11]};
+          step = align_object(va, vb, shift).motion;
+        }
+        pose = compose_rigid(step, pose);
+      }
+      // y = R (x - tau) + q with R the pose's rotation transposed and tau its translation.
+      const Mat3 R{pose[0], pose[4], pose[8], pose[1], pose[5], pose[9], pose[2], pose[6], pose[10]};
+      angles = matrix_to_euler_xyz(R, angles);
+      known_rows.push_back({angles[0], angles[1], angles[2], pose[3], pose[7], pose[11]});
+    }
     float* r = rows.data() + static_cast<size_t>(k - 1) * F * 6;
     for (int i = 0; i < F; ++i) {
       const auto after = std::lower_bound(known.begin(), known.end(), i);
-      Vec3 p;
-      if (after == known.begin()) p = *anchor[static_cast<size_t>(known.front())];
-      else if (after == known.end()) p = *anchor[static_cast<size_t>(known.back())];
+      std::array<double, 6> p;
+      if (after == known.begin()) p = known_rows.front();
+      else if (after == known.end()) p = known_rows.back();
       else {
-        const int hi = *after, lo = *(after - 1);
-        const double w = hi == lo ? 0.0 : static_cast<double>(i - lo) / (hi - lo);
-        for (int d = 0; d < 3; ++d)
-          p[d] = (1 - w) * (*anchor[static_cast<size_t>(lo)])[d] + w * (*anchor[static_cast<size_t>(hi)])[d];
+        const size_t hi = static_cast<size_t>(after - known.begin()), lo = hi - 1;
+        const double w = known[hi] == i ? 1.0 : static_cast<double>(i - known[lo]) / (known[hi] - known[lo]);
+        for (int d = 0; d < 6; ++d) p[static_cast<size_t>(d)] = (1 - w) * known_rows[lo][static_cast<size_t>(d)] + w * known_rows[hi][static_cast<size_t>(d)];
       }
-      for (int d = 0; d < 3; ++d) r[static_cast<size_t>(i) * 6 + 3 + d] = static_cast<float>(p[d]);
+      for (int d = 0; d < 6; ++d) r[static_cast<size_t>(i) * 6 + d] = static_cast<float>(p[static_cast<size_t>(d)]);
     }
   }
   return rows;

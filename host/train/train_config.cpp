@@ -231,6 +231,9 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "none";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
+  o.push_back(float_option("lr-motion", "object-motion rigid: the trajectories' learning rate as a fraction of lr (0: kept where the frames' alignment put them)", 0.0, 1.0,
+                           [](TrainConfig& c) -> float& { return c.lr_motion; }));
+  o.back().before = "1";
   o.back().before = "0";
   o.push_back(float_option("w-distortion", "weight of the distortion loss: each object NeRF's weight spread along the rays of its mask (streaks; joint training)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_distortion; }));

@@ -191,6 +191,9 @@ void Trainer::ensure_phase() {
   for (auto& pack : {graph_->pack_static, graph_->pack_objects})
     if (pack) pack->grids = occupancy_ ? occupancy_->grids() : nullptr;
   adam_ = std::make_unique<Adam>(rt_, exec_->parameter_floats(), config_.adam);
+  if (graph_->motion.valid())
+    adam_->scale_range(exec_->parameter_offset(graph_->motion), graph_->graph.tensor(graph_->motion.id).shape.numel(),
+                       config_.lr_motion);
   graph_joint_ = joint;
 }
 

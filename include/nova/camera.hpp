@@ -26,6 +26,26 @@ struct Camera {
   double position(int r) const { return c2w[r * 4 + 3]; }
 };
 
+// The world point of pixel (x, y) at camera-space depth `depth` (the distance along the view
+// axis, -z of the camera's frame; pixel (x, y) looks along ((x - cx) / fx, -(y - cy) / fy, -1)).
+inline std::array<double, 3> camera_unproject(const Camera& c, double x, double y, double depth) {
+  const double u = (x - c.cx) / c.fx, v = -(y - c.cy) / c.fy;
+  std::array<double, 3> p{};
+  for (int k = 0; k < 3; ++k)
+    p[k] = c.position(k) + depth * (c.rotation(k, 0) * u + c.rotation(k, 1) * v - c.rotation(k, 2));
+  return p;
+}
+
+// A world point's pixel (x, y) and camera-space depth; depth <= 0 behind the camera (x, y 0).
+inline std::array<double, 3> camera_project(const Camera& c, const std::array<double, 3>& p) {
+  double q[3]{};
+  for (int k = 0; k < 3; ++k)
+    for (int r = 0; r < 3; ++r) q[k] += c.rotation(r, k) * (p[r] - c.position(r));
+  const double z = -q[2];
+  if (z <= 1e-12) return {0, 0, z};
+  return {c.cx + c.fx * q[0] / z, c.cy - c.fy * q[1] / z, z};
+}
+
 // The largest entry of |R^T R - I| for the 3x3 block R = m[r * row_stride + c] (r, c < 3):
 // 0 when its columns are orthonormal (a rotation or a reflection). Readers refuse camera
 // axes beyond a tolerance, as rays are built from them as unit vectors.

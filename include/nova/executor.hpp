@@ -106,6 +106,8 @@ class Executor {
   cl_mem gradient_arena() const { return grad_arena_.get(); }
   size_t parameter_floats() const { return param_arena_floats_; }
   size_t parameter_count() const;  // real parameters, without alignment padding
+  // Where a parameter starts in the arena, in floats (for an optimiser's per-range settings).
+  size_t parameter_offset(Tensor t) const;
 
   // Peak bytes of the planned (reused) arena and what separate buffers would need.
   const MemoryPlan& plan() const { return plan_; }
@@ -137,6 +139,7 @@ class Executor {
 
   Buffer arena_, param_arena_, grad_arena_;
   size_t param_arena_floats_ = 0;
+  std::vector<size_t> param_offsets_;  // per tensor, floats (parameters only)
   std::vector<Buffer> values_, grads_;                 // sub-buffers, per tensor
   std::vector<Buffer> fwd_workspace_, bwd_workspace_;  // per node
   MemoryPlan plan_;

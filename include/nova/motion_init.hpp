@@ -11,12 +11,14 @@
 
 namespace nova {
 
-// The [K, F, 6] motion rows (motion_parameter's layout): per object and frame no turn and
-// a translation to its anchor, the mask's centroid at the object's depth (from the disparity
-// fitted to the static NeRF's depth on background pixels, or without disparity or a fit the nearer
-// quartile of the static depth behind the mask); frames where the object is not seen take
-// their neighbours' anchors; so y = x - anchor(t) + mean anchor.
-// `trained` holds the static NeRF's weights ("static.*").
+// The [K, F, 6] motion rows (motion_parameter's layout). With a disparity that the background's
+// parallax places in depth (disparity_fit.hpp): per object, the first frame that shows it puts
+// its canonical space at the mask's centroid at the median depth, unturned, and each later
+// frame is the previous one moved by the alignment of the two frames' views of the object
+// (motion_alignment.hpp). Otherwise no turn, and each frame's anchor is the mask's centroid at
+// the nearer quartile of the static NeRF's depth behind the mask. Frames without the object
+// take their neighbours' rows (linear between, the nearest beyond).
+// `trained` holds the static NeRF's weights ("static.*"), rendered only without a fit.
 std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
                                   int samples, Executor& trained);
 

@@ -34,6 +34,9 @@ class Adam {
   cl_mem first_moment() const { return m_.get(); }
   cl_mem second_moment() const { return v_.get(); }
   void set_steps(long t) { t_ = t; }
+  // One range of the parameters (floats [first, first + count)) steps at `scale` times the
+  // learning rate: a quantity that must move slower than the networks (a trajectory).
+  void scale_range(size_t first, size_t count, float scale);
   size_t count() const { return count_; }
 
  private:
@@ -42,6 +45,8 @@ class Adam {
   AdamConfig config_;
   Buffer m_, v_;
   long t_ = 0;
+  size_t scaled_first_ = 0, scaled_end_ = 0;
+  float scale_ = 1.0f;
 };
 
 }  // namespace nova

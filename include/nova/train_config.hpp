@@ -57,6 +57,9 @@ struct TrainConfig : ModelConfig {
   // With a rigid object motion (FieldConfig::motion): weight of the trajectories' smoothness
   // (second differences of the per-frame motion, motion_smoothness).
   float w_motion_smooth = 0.0f;
+  // The trajectories' learning rate as a fraction of lr: they start from the frames'
+  // alignment, and at the networks' rate they wander to explain what the fields miss.
+  float lr_motion = 0.1f;
   // Empty-space skipping (occupancy.hpp; on with ModelConfig::occupancy): one grid per NeRF,
   // updated from the density every occupancy_every steps once occupancy_warmup steps of a
   // phase have passed; samples in empty cells never reach an MLP.
