@@ -114,19 +114,25 @@ double finite_min(const std::vector<double>& v) {
 SetSummary summarise(const std::string& set, const std::vector<const SceneResult*>& rs) {
   SetSummary s;
   s.set = set;
-  std::vector<double> cam0, held, comp;
+  std::vector<double> cam0, held, comp, cam0_obj, held_obj, comp_obj;
   for (const SceneResult* r : rs) {
     if (!r->scored()) continue;
     ++s.scenes;
     cam0.push_back(r->cam0_psnr);
     held.push_back(r->heldout_psnr);
     comp.push_back(r->compose_psnr);
+    cam0_obj.push_back(r->cam0_object_psnr);
+    held_obj.push_back(r->heldout_object_psnr);
+    comp_obj.push_back(r->compose_object_psnr);
     if (std::isfinite(r->train_s)) s.total_train_s += r->train_s;
   }
   s.mean_cam0_psnr = finite_mean(cam0);
   s.min_cam0_psnr = finite_min(cam0);
   s.mean_heldout_psnr = finite_mean(held);
   s.mean_compose_psnr = finite_mean(comp);
+  s.mean_cam0_object_psnr = finite_mean(cam0_obj);
+  s.mean_heldout_object_psnr = finite_mean(held_obj);
+  s.mean_compose_object_psnr = finite_mean(comp_obj);
   return s;
 }
 
@@ -160,27 +166,34 @@ std::string num_or(double v, int decimals, const std::string& none) {
   return std::isfinite(v) ? num(v, decimals) : none;
 }
 
+// The objects' PSNR leads each pair: objects are a few percent of a frame, and the whole
+// frame's PSNR hides them.
 std::string table_text(const std::vector<SceneResult>& results, const std::vector<SetSummary>& sets) {
   std::ostringstream o;
   o << std::left << std::setw(18) << "scene" << std::setw(7) << "set" << std::right << std::setw(7) << "steps"
-    << std::setw(9) << "train s" << std::setw(8) << "eval s" << std::setw(9) << "cam0" << std::setw(7) << "SSIM"
-    << std::setw(9) << "held-out" << std::setw(7) << "SSIM" << std::setw(9) << "compose" << "  status\n";
+    << std::setw(9) << "train s" << std::setw(8) << "eval s" << std::setw(10) << "cam0 obj" << std::setw(7) << "cam0"
+    << std::setw(7) << "SSIM" << std::setw(10) << "held obj" << std::setw(9) << "held-out" << std::setw(7) << "SSIM"
+    << std::setw(10) << "comp obj" << std::setw(9) << "compose" << "  status\n";
   for (const SceneResult& r : results)
     o << std::left << std::setw(18) << r.name << std::setw(7) << r.set << std::right << std::setw(7) << r.steps
-      << std::setw(9) << num_or(r.train_s, 1) << std::setw(8) << num_or(r.eval_s, 1) << std::setw(9)
-      << num_or(r.cam0_psnr, 2) << std::setw(7) << num_or(r.cam0_ssim, 3) << std::setw(9) << num_or(r.heldout_psnr, 2)
-      << std::setw(7) << num_or(r.heldout_ssim, 3) << std::setw(9) << num_or(r.compose_psnr, 2) << "  " << r.status
-      << "\n";
+      << std::setw(9) << num_or(r.train_s, 1) << std::setw(8) << num_or(r.eval_s, 1) << std::setw(10)
+      << num_or(r.cam0_object_psnr, 2) << std::setw(7) << num_or(r.cam0_psnr, 2) << std::setw(7)
+      << num_or(r.cam0_ssim, 3) << std::setw(10) << num_or(r.heldout_object_psnr, 2) << std::setw(9)
+      << num_or(r.heldout_psnr, 2) << std::setw(7) << num_or(r.heldout_ssim, 3) << std::setw(10)
+      << num_or(r.compose_object_psnr, 2) << std::setw(9) << num_or(r.compose_psnr, 2) << "  " << r.status << "\n";
   o << "\n"
-    << std::left << std::setw(7) << "set" << std::right << std::setw(7) << "scenes" << std::setw(11) << "cam0 mean"
-    << std::setw(10) << "cam0 min" << std::setw(15) << "held-out mean" << std::setw(14) << "compose mean"
-    << std::setw(10) << "train s" << "\n";
+    << std::left << std::setw(7) << "set" << std::right << std::setw(7) << "scenes" << std::setw(10) << "cam0 obj"
+    << std::setw(11) << "cam0 mean" << std::setw(10) << "cam0 min" << std::setw(10) << "held obj" << std::setw(15)
+    << "held-out mean" << std::setw(10) << "comp obj" << std::setw(14) << "compose mean" << std::setw(10) << "train s"
+    << "\n";
   for (const SetSummary& s : sets)
-    o << std::left << std::setw(7) << s.set << std::right << std::setw(7) << s.scenes << std::setw(11)
-      << num_or(s.mean_cam0_psnr, 2) << std::setw(10) << num_or(s.min_cam0_psnr, 2) << std::setw(15)
-      << num_or(s.mean_heldout_psnr, 2) << std::setw(14) << num_or(s.mean_compose_psnr, 2) << std::setw(10)
-      << num_or(s.total_train_s, 1) << "\n";
-  o << "PSNR in dB (OpenCV's, 8-bit), as nova eval; '-': the scene has no such views\n";
+    o << std::left << std::setw(7) << s.set << std::right << std::setw(7) << s.scenes << std::setw(10)
+      << num_or(s.mean_cam0_object_psnr, 2) << std::setw(11) << num_or(s.mean_cam0_psnr, 2) << std::setw(10)
+      << num_or(s.min_cam0_psnr, 2) << std::setw(10) << num_or(s.mean_heldout_object_psnr, 2) << std::setw(15)
+      << num_or(s.mean_heldout_psnr, 2) << std::setw(10) << num_or(s.mean_compose_object_psnr, 2) << std::setw(14)
+      << num_or(s.mean_compose_psnr, 2) << std::setw(10) << num_or(s.total_train_s, 1) << "\n";
+  o << "PSNR in dB (OpenCV's, 8-bit), as nova eval; obj: inside the objects' masks (a composition "
+       "target's: where its instances are); '-': the scene has no such views\n";
   return o.str();
 }
 
@@ -198,11 +211,13 @@ std::string csv_text(const std::vector<SceneResult>& results, const std::vector<
          num(r.eval_s, 3) + "," + num(r.cam0_psnr, 4) + "," + num(r.cam0_psnr, 4) + "," + num(r.cam0_ssim, 5) + "," +
          num(r.heldout_psnr, 4) + "," + num(r.heldout_ssim, 5) + "," + num(r.compose_psnr, 4) + "," +
          std::to_string(r.cam0_views) + "," + std::to_string(r.heldout_views) + "," + std::to_string(r.compose_views) +
+         "," + num(r.cam0_object_psnr, 4) + "," + num(r.heldout_object_psnr, 4) + "," + num(r.compose_object_psnr, 4) +
          "," + csv_field(r.status) + "\n";
   for (const SetSummary& s : sets)
     o += "set," + s.set + "," + s.set + "," + std::to_string(s.scenes) + ",," + num(s.total_train_s, 3) + ",," +
          num(s.mean_cam0_psnr, 4) + "," + num(s.min_cam0_psnr, 4) + ",," + num(s.mean_heldout_psnr, 4) + ",," +
-         num(s.mean_compose_psnr, 4) + ",,,,\n";
+         num(s.mean_compose_psnr, 4) + ",,,," + num(s.mean_cam0_object_psnr, 4) + "," +
+         num(s.mean_heldout_object_psnr, 4) + "," + num(s.mean_compose_object_psnr, 4) + ",\n";
   return o;
 }
 
@@ -234,7 +249,7 @@ void parse_csv(const std::string& text, std::vector<SceneResult>* results, std::
   for (int n = 2; std::getline(lines, line); ++n) {
     if (line.empty()) continue;
     const std::vector<std::string> f = split_csv_line(line);
-    if (f.size() != 17) throw Error("accuracy CSV line " + std::to_string(n) + ": " + std::to_string(f.size()) + " fields, not 17");
+    if (f.size() != 20) throw Error("accuracy CSV line " + std::to_string(n) + ": " + std::to_string(f.size()) + " fields, not 20");
     try {
       if (f[0] == "scene") {
         SceneResult r;
@@ -242,13 +257,16 @@ void parse_csv(const std::string& text, std::vector<SceneResult>* results, std::
         r.cam0_psnr = number(f[7]), r.cam0_ssim = number(f[9]), r.heldout_psnr = number(f[10]);
         r.heldout_ssim = number(f[11]), r.compose_psnr = number(f[12]);
         r.cam0_views = std::stoi(f[13]), r.heldout_views = std::stoi(f[14]), r.compose_views = std::stoi(f[15]);
-        r.status = f[16];
+        r.cam0_object_psnr = number(f[16]), r.heldout_object_psnr = number(f[17]), r.compose_object_psnr = number(f[18]);
+        r.status = f[19];
         results->push_back(r);
       } else if (f[0] == "set") {
         SetSummary s;
         s.set = f[1], s.scenes = std::stoi(f[3]), s.total_train_s = number(f[5]);
         s.mean_cam0_psnr = number(f[7]), s.min_cam0_psnr = number(f[8]), s.mean_heldout_psnr = number(f[10]);
         s.mean_compose_psnr = number(f[12]);
+        s.mean_cam0_object_psnr = number(f[16]), s.mean_heldout_object_psnr = number(f[17]);
+        s.mean_compose_object_psnr = number(f[18]);
         sets->push_back(s);
       } else {
         throw Error("kind '" + f[0] + "' is not scene or set");
@@ -291,6 +309,7 @@ std::string json_text(const std::vector<std::pair<std::string, std::string>>& se
                       {"heldout_object_psnr", json_number(r.heldout_object_psnr, 4)},
                       {"heldout_background_psnr", json_number(r.heldout_background_psnr, 4)},
                       {"compose_psnr", json_number(r.compose_psnr, 4)},
+                      {"compose_object_psnr", json_number(r.compose_object_psnr, 4)},
                       {"compose_views", r.compose_views}});
   nlohmann::ordered_json set_rows = nlohmann::ordered_json::array();
   for (const SetSummary& s : sets)
@@ -300,6 +319,9 @@ std::string json_text(const std::vector<std::pair<std::string, std::string>>& se
                         {"min_cam0_psnr", json_number(s.min_cam0_psnr, 4)},
                         {"mean_heldout_psnr", json_number(s.mean_heldout_psnr, 4)},
                         {"mean_compose_psnr", json_number(s.mean_compose_psnr, 4)},
+                        {"mean_cam0_object_psnr", json_number(s.mean_cam0_object_psnr, 4)},
+                        {"mean_heldout_object_psnr", json_number(s.mean_heldout_object_psnr, 4)},
+                        {"mean_compose_object_psnr", json_number(s.mean_compose_object_psnr, 4)},
                         {"total_train_seconds", json_number(s.total_train_s, 3)}});
   nlohmann::ordered_json json;
   json["configuration"] = std::move(configuration);

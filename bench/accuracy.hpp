@@ -74,13 +74,17 @@ struct SceneResult {
   double heldout_psnr = kNaN, heldout_ssim = kNaN;  // held-out cameras / frames / test split
   double compose_psnr = kNaN;                       // composition targets (synthetic)
   // Means over the views whose objects region is known (synthetic ground truth, a real
-  // scene's held-out frames): PSNR inside the objects' masks and outside them (nova eval's
-  // columns). In accuracy.json, not the CSV.
+  // scene's held-out frames; a composition target's region is where its instances are): PSNR
+  // inside the objects' masks and outside them (nova eval's columns). The objects' PSNR is in
+  // the table and the CSV, the background's in accuracy.json.
   double cam0_object_psnr = kNaN, cam0_background_psnr = kNaN;
   double heldout_object_psnr = kNaN, heldout_background_psnr = kNaN;
+  double compose_object_psnr = kNaN;
   int cam0_views = 0, heldout_views = 0, compose_views = 0;
   // What `nova eval` reports by default: camera 0 where the scene has it, else held-out views.
   double psnr() const { return std::isfinite(cam0_psnr) ? cam0_psnr : heldout_psnr; }
+  // The same views' PSNR inside the objects (NaN where no objects region is known).
+  double object_psnr() const { return std::isfinite(cam0_psnr) ? cam0_object_psnr : heldout_object_psnr; }
   bool scored() const { return status == "ok" || status == "reused"; }
 };
 
@@ -89,6 +93,7 @@ struct SetSummary {
   std::string set;  // dev, test, real, other, or "all" (every scene, when there is more than one set)
   int scenes = 0;   // scored scenes
   double mean_cam0_psnr = kNaN, min_cam0_psnr = kNaN, mean_heldout_psnr = kNaN, mean_compose_psnr = kNaN;
+  double mean_cam0_object_psnr = kNaN, mean_heldout_object_psnr = kNaN, mean_compose_object_psnr = kNaN;
   double total_train_s = 0;
 };
 
@@ -111,7 +116,8 @@ std::string table_text(const std::vector<SceneResult>& results, const std::vecto
 
 inline const char* kCsvHeader =
     "kind,name,set,scenes,steps,train_seconds,eval_seconds,cam0_psnr,cam0_min_psnr,cam0_ssim,heldout_psnr,"
-    "heldout_ssim,compose_psnr,cam0_views,heldout_views,compose_views,status";
+    "heldout_ssim,compose_psnr,cam0_views,heldout_views,compose_views,cam0_object_psnr,heldout_object_psnr,"
+    "compose_object_psnr,status";
 
 // A CSV field: quoted when it holds a comma or a quote.
 std::string csv_field(const std::string& s);

@@ -224,7 +224,10 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
     std::tie(r.heldout_psnr, r.heldout_ssim) = mean_scores(held_scores);
     std::tie(r.heldout_object_psnr, r.heldout_background_psnr) = mean_region_scores(held_scores);
   }
-  if (!compose_scores.empty()) r.compose_psnr = mean_scores(compose_scores).first;
+  if (!compose_scores.empty()) {
+    r.compose_psnr = mean_scores(compose_scores).first;
+    r.compose_object_psnr = mean_region_scores(compose_scores).first;
+  }
   r.cam0_views = static_cast<int>(cam0_scores.size());
   r.heldout_views = static_cast<int>(held_scores.size());
   r.compose_views = static_cast<int>(compose_scores.size());
@@ -233,14 +236,15 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
 }
 
 Image8 results_plot(const std::vector<SceneResult>& results, const std::string& config_text) {
-  std::vector<BarGroup> bars;
+  std::vector<BarGroup> bars, object_bars;
   std::vector<ScatterGroup> points;
   for (const std::string set : {"dev", "test", "real", "other"}) {
-    BarGroup g{set, {}};
+    BarGroup g{set, {}}, go{set, {}};
     ScatterGroup s{set, {}, {}};
     for (const SceneResult& r : results) {
       if (r.set != set) continue;
       g.bars.emplace_back(r.name, r.scored() ? r.psnr() : kNaN);
+      go.bars.emplace_back(r.name, r.scored() ? r.object_psnr() : kNaN);
       if (r.scored()) {
         s.xy.emplace_back(r.train_s, r.psnr());
         s.names.push_back(r.name);
@@ -248,12 +252,15 @@ Image8 results_plot(const std::vector<SceneResult>& results, const std::string& 
     }
     if (g.bars.empty()) continue;
     bars.push_back(g);
+    object_bars.push_back(go);
     points.push_back(s);
   }
-  const Image8 a = plot_bar_groups(bars, "PSNR per scene (camera 0 at every time; real scenes: held-out views), " + config_text,
-                                   "PSNR (dB)");
+  const Image8 objects = plot_bar_groups(
+      object_bars, "PSNR inside the objects' masks (camera 0 at every time; real scenes: held-out views), " + config_text,
+      "PSNR (dB)");
+  const Image8 a = plot_bar_groups(bars, "PSNR of the whole frame, the same views", "PSNR (dB)");
   const Image8 b = plot_scatter(points, "PSNR against training time", "training time (s)", "PSNR (dB)");
-  return stack_images({a, b});
+  return stack_images({objects, a, b});
 }
 
 }  // namespace
@@ -381,16 +388,15 @@ int accuracy(const Args& raw_args) {
       Evaluated ev = train_and_evaluate(rt, p, out + "/runs/" + p.spec.dir_name(), o.flag("reuse"));
       if (!ev.picture.empty()) write_png_atomically(out + "/pictures/" + p.spec.dir_name() + ".png", ev.picture);
       const SceneResult& r = ev.result;
-      // Where the views' objects regions are known, the PSNR inside and outside them.
-      const auto regions = [](double object, double background) {
-        return std::isfinite(object) ? " (objects " + num_or(object, 2) + ", background " + num_or(background, 2) + ")"
-                                     : std::string();
+      // Where the views' objects regions are known, the PSNR inside them first, then the frame's.
+      const auto scores = [](double object, double frame) {
+        return std::isfinite(object) ? "objects " + num_or(object, 2) + " / frame " + num_or(frame, 2)
+                                     : num_or(frame, 2);
       };
       std::cerr << "  " << r.name << ": " << r.steps << " steps, train " << num_or(r.train_s, 1) << " s, eval "
-                << num_or(r.eval_s, 1) << " s; PSNR camera 0 " << num_or(r.cam0_psnr, 2)
-                << regions(r.cam0_object_psnr, r.cam0_background_psnr) << ", held-out " << num_or(r.heldout_psnr, 2)
-                << regions(r.heldout_object_psnr, r.heldout_background_psnr) << ", composition "
-                << num_or(r.compose_psnr, 2) << "\n";
+                << num_or(r.eval_s, 1) << " s; PSNR camera 0 " << scores(r.cam0_object_psnr, r.cam0_psnr)
+                << ", held-out " << scores(r.heldout_object_psnr, r.heldout_psnr) << ", composition "
+                << scores(r.compose_object_psnr, r.compose_psnr) << "\n";
       results.push_back(std::move(ev.result));
     } catch (const std::exception& e) {
       // One failing scene does not stop the rest; the exit code says so.

@@ -149,6 +149,7 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   rs[1].heldout_views = 20;
   rs[1].heldout_object_psnr = 16.12346, rs[1].heldout_background_psnr = 22.5;
   rs[0].cam0_object_psnr = 15.25, rs[0].cam0_background_psnr = 21.0;
+  rs[0].compose_object_psnr = 14.5;
   const std::vector<SetSummary> sets = aggregate(rs);
   const std::string csv = csv_text(rs, sets);
   std::vector<SceneResult> back;
@@ -168,6 +169,12 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   BOOST_TEST(back[1].heldout_views == 20);
   BOOST_TEST(back_sets[0].set == "dev");
   BOOST_TEST(back_sets[0].mean_cam0_psnr == 20.1235, boost::test_tools::tolerance(1e-9));
+  // The objects' PSNR travels in the CSV too (the background's only in the JSON).
+  BOOST_TEST(back[0].cam0_object_psnr == 15.25);
+  BOOST_TEST(back[0].compose_object_psnr == 14.5);
+  BOOST_TEST(back[1].heldout_object_psnr == 16.1235, boost::test_tools::tolerance(1e-9));
+  BOOST_TEST(back_sets[0].mean_cam0_object_psnr == 15.25);
+  BOOST_TEST(back_sets[0].mean_compose_object_psnr == 14.5);
   BOOST_TEST(csv_text(back, back_sets) == csv);  // a fixed point
   BOOST_CHECK_THROW(parse_csv("kind,name\n", &back, &back_sets), Error);
   BOOST_CHECK_THROW(parse_csv(std::string(kCsvHeader) + "\nscene,x\n", &back, &back_sets), Error);
@@ -221,13 +228,15 @@ BOOST_AUTO_TEST_CASE(runs_on_a_tiny_synthetic_scene) {
   BOOST_TEST(rs[0].cam0_psnr > 5.0);
   BOOST_TEST(rs[0].train_s > 0.0);
   BOOST_TEST(r.out.find("synth:tiny:3") != std::string::npos, r.out);
-  // The synthetic ground truth carries its objects regions: camera 0 is scored inside and
-  // outside them (accuracy.json and the progress line).
+  // The synthetic ground truth carries its objects regions: camera 0 and the composition
+  // targets are scored inside and outside them (accuracy.json, the CSV and the progress line).
   const nlohmann::json scene = nlohmann::json::parse(read_all(fs::path(out) / "accuracy.json")).at("scenes").at(0);
   BOOST_TEST(scene.at("cam0_object_psnr").get<double>() > 5.0);
   BOOST_TEST(scene.at("cam0_background_psnr").get<double>() > 5.0);
   BOOST_TEST(r.err.find("PSNR camera 0 ") != std::string::npos);
-  BOOST_TEST(r.err.find(" (objects ") != std::string::npos, r.err);
+  BOOST_TEST(r.err.find("PSNR camera 0 objects ") != std::string::npos, r.err);
+  BOOST_TEST(std::isfinite(rs[0].compose_object_psnr));
+  BOOST_TEST(rs[0].compose_object_psnr > 5.0);
   const Image8 pic = read_rgb((fs::path(out) / "pictures/synth-tiny-3.png").string());
   BOOST_TEST(pic.width >= 6 * 64);  // three times, render and truth
   BOOST_TEST(read_rgb((fs::path(out) / "accuracy.png").string()).width == 1000);

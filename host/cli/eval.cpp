@@ -204,6 +204,11 @@ int eval_rank(const Args& args, MpiJob* mpi) {
     json["mean_background_psnr"] = score_value(mbp);
   }
   json["compose"] = json_scores(compose);
+  const auto [cop, cbp] = mean_region_scores(compose);
+  if (std::isfinite(cop)) {
+    json["compose_mean_object_psnr"] = score_value(cop);
+    json["compose_mean_background_psnr"] = score_value(cbp);
+  }
   json["compose_mean_psnr"] = score_value(cp);
   json["compose_mean_ssim"] = score_value(cs);
   json["seconds"] = score_value(secs);
@@ -215,11 +220,15 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   }
   std::filesystem::rename(path + ".tmp", path);
   std::cout << std::fixed << std::setprecision(2);
-  if (!scores.empty()) std::cout << "mean PSNR " << mp << " dB, SSIM " << std::setprecision(4) << ms << " over " << scores.size() << " views\n";
+  // The objects first: they are a few percent of a frame, and the whole frame's mean hides them.
   if (regions)
     std::cout << "inside the objects' masks " << std::setprecision(2) << mop << " dB, outside " << mbp << " dB\n";
-  if (!compose.empty())
-    std::cout << "composition targets: mean PSNR " << std::setprecision(2) << cp << " dB over " << compose.size() << "\n";
+  if (!scores.empty()) std::cout << "mean PSNR " << mp << " dB, SSIM " << std::setprecision(4) << ms << " over " << scores.size() << " views\n";
+  if (!compose.empty()) {
+    std::cout << "composition targets: ";
+    if (std::isfinite(cop)) std::cout << "inside the instances " << std::setprecision(2) << cop << " dB, ";
+    std::cout << "mean PSNR " << std::setprecision(2) << cp << " dB over " << compose.size() << "\n";
+  }
   std::cout << "wrote " << path << " and renders in " << pictures << "/ (" << std::setprecision(1) << secs << " s)\n";
   return 0;
 }

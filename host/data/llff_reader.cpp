@@ -216,7 +216,11 @@ void read_ground_truth(const path& dir, Scene& scene, const WorldTransform& worl
     scene.compose = cs;
     for (const auto& t : scene.compose.targets) {
       const path img = gt / "compose" / (t.name + ".png");
-      if (fs::exists(img)) scene.compose_gt.push_back({t.name, downscale_by(read_rgb(img.string()), factor, img.string())});
+      if (!fs::exists(img)) continue;
+      ComposeTargetImage ti{t.name, downscale_by(read_rgb(img.string()), factor, img.string()), {}};
+      const path objects = gt / ground_truth_objects_name("compose/" + t.name + ".png");
+      if (fs::exists(objects)) ti.objects = resize_nearest(read_mask(objects.string()), ti.rgb.width, ti.rgb.height);
+      scene.compose_gt.push_back(std::move(ti));
     }
     scene.notes.push_back("gt/compose/: " + std::to_string(scene.compose.targets.size()) +
                           " composition targets, " + std::to_string(scene.compose_gt.size()) +

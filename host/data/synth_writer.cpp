@@ -183,7 +183,9 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
     for (const auto& i : t.instances)
       inst.push_back({i.object, pose_multiply(raw_instance_map(i, a), world.object_pose(i.object, i.time))});
     const SynthRender r = world.render_instances(world.camera(t.camera), t.background, inst);
-    write_png((root / "gt" / "compose" / (t.name + ".png")).string(), r.rgb);
+    const std::string rel = "compose/" + t.name + ".png";
+    write_png((root / "gt" / rel).string(), r.rgb);
+    if (r.masks.size() > 1) write_png((root / "gt" / ground_truth_objects_name(rel)).string(), objects_region(r.masks));
   }
 
   std::ostringstream info;

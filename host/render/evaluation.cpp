@@ -103,8 +103,12 @@ std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene
   for (size_t i = 0; i < scene.compose.targets.size(); ++i) {
     const ComposeTarget& t = scene.compose.targets[i];
     const Image8* gt = nullptr;
+    const Image8* objects = nullptr;
     for (const auto& c : scene.compose_gt)
-      if (c.name == t.name) gt = &c.rgb;
+      if (c.name == t.name) {
+        gt = &c.rgb;
+        objects = c.objects.empty() ? nullptr : &c.objects;
+      }
     if (!gt || t.camera < 0 || t.camera >= static_cast<int>(frames.size())) continue;
     // Objects alone where none is in view: a black truth that a black render matches exactly
     // (PSNR "infinite", 361 in OpenCV's number), which would swamp every mean it entered.
@@ -126,7 +130,12 @@ std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene
     const ViewImage img = renderer.render(req);
     const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
     if (sink) sink(i, "compose_" + t.name, out);
-    scores.push_back({t.name, psnr(out, *gt), ssim(out, *gt)});
+    ViewScore score{t.name, psnr(out, *gt), ssim(out, *gt)};
+    if (objects) {
+      score.object_psnr = region_psnr(out, *gt, *objects, true);
+      score.background_psnr = region_psnr(out, *gt, *objects, false);
+    }
+    scores.push_back(score);
   }
   return scores;
 }

@@ -154,7 +154,7 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
     bool moved = true;
     while (moved) {
       moved = false;
-      for (const auto [du, dv] : {std::pair{h, 0.0}, {-h, 0.0}, {0.0, h}, {0.0, -h}, {h, h}, {-h, -h}}) {
+      for (const auto& [du, dv] : {std::pair{h, 0.0}, {-h, 0.0}, {0.0, h}, {0.0, -h}, {h, h}, {-h, -h}}) {
         if (bv + dv < bu + du) continue;
         const double c = eval(bu + du, bv + dv);
         if (c < best) {

@@ -74,6 +74,7 @@ struct GroundTruthView {
 struct ComposeTargetImage {
   std::string name;  // ComposeTarget::name
   Image8 rgb;
+  Image8 objects;    // where its instances are (>= 128), when the truth gives it; else empty
 };
 
 struct Scene {
