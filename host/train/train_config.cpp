@@ -220,7 +220,7 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "1e-06";
   o.push_back(convention_option("pretrain-render", "static pretraining rendered as blend (through the blend normalisation) or plain (a plain NeRF, no blend: the reference code's)",
                                 "blend", "plain", [](TrainConfig& c) -> bool& { return c.conventions.pretrain_plain; }));
-  o.push_back({"object-motion", "object NeRFs: none (the paper's field of x, y, z, t) or rigid (one canonical shape per object of x, y, z, moved by a learned rigid motion per frame, initialised from the masks and the disparity)",
+  o.push_back({"object-motion", "object NeRFs: none (the paper's field of x, y, z, t) or rigid (one canonical shape per object of x, y, z, moved by a rigid motion per frame, found by aligning the frames and then learned)",
                [](const TrainConfig& c) { return std::string(object_motion_name(c.field.motion)); },
                [](TrainConfig& c, const std::string& v) {
                  const std::string t = trim(v);
