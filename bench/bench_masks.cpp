@@ -100,6 +100,7 @@ int masks(const Args& args) {
                          {"min-area", text(opt.min_area)},
                          {"depth-search", text(opt.depth_search)},
                          {"grow-depth", text(opt.grow_depth)},
+                         {"grow-limit", text(opt.grow_limit)},
                          {"min-track-frames", text(opt.min_track_frames)},
                          {"global-fit", "off"},
                          {"out", ""},
@@ -120,6 +121,7 @@ int masks(const Args& args) {
   opt.min_area = std::stod(o.str("min-area"));
   opt.depth_search = std::stod(o.str("depth-search"));
   opt.grow_depth = std::stod(o.str("grow-depth"));
+  opt.grow_limit = std::stod(o.str("grow-limit"));
   opt.min_track_frames = std::stod(o.str("min-track-frames"));
   opt.per_frame_fit = !o.flag("global-fit");
   opt.grabcut = !o.flag("no-grabcut");

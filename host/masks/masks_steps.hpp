@@ -65,7 +65,9 @@ double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptio
 // depth's smooth surfaces (options.grow_depth), GrabCut.
 cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame, const cv::Mat& inv_depth,
                       const MotionMaskOptions& options);
-cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step);
+// Each connected part of `region` grown over pixels whose inverse depth changes by less than
+// `step` (relative) from pixel to pixel, unless it would grow past `max_growth` times its area.
+cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step, double max_growth);
 // Drops connected regions under `min_pixels` and fills enclosed holes (CV_8U, 255 inside).
 cv::Mat clean_region(const cv::Mat& region, int min_pixels);
 

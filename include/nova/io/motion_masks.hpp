@@ -15,7 +15,9 @@
 //    one neighbour's occlusion or glare does not look like motion.
 // 3. Masks: the score, smoothed, above a threshold taken from its own distribution (a robust
 //    noise level, never below an absolute floor), cleaned (small regions dropped, holes
-//    filled) and its edges moved to the image's colour edges (OpenCV's GrabCut).
+//    filled), grown over the depth's smooth surfaces where that stays bounded (the parts of a
+//    moving object that hardly move) and its edges moved to the image's colour edges
+//    (OpenCV's GrabCut).
 // 4. Objects: connected regions, tracked through time by overlap; a track is an object where
 //    it is seen in enough frames. --objects K merges the smaller tracks into the nearest of
 //    the K largest.
@@ -40,7 +42,9 @@ struct MotionMaskOptions {
   int depth_search_steps = 3;            // on either side
   double threshold_floor = 0.5;          // the threshold is never below this score
   double threshold_mads = 6.0;           // robust noise level: median + this many MAD sigmas
-  double grow_depth = 0.0;               // relative inverse-depth step the region grows over (0: off)
+  double grow_depth = 0.005;             // relative inverse-depth step the region grows over (0: off)
+  double grow_limit = 6.0;               // a part that would add more than this many times its
+                                         // area (or a quarter of the frame) does not grow
   double min_area = 0.002;               // regions smaller than this fraction of a frame drop
   double min_track_frames = 0.15;        // a track is an object in this fraction of frames (and 2)
   bool grabcut = true;                   // refine edges on the image
