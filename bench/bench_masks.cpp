@@ -90,7 +90,8 @@ int masks(const Args& args) {
                          {"scene", ""},
                          {"truth", ""},
                          {"factor", "0"},
-                         {"offsets", "1,2,3"},
+                         {"offsets", "1,2,3,4"},
+                         {"match-radius", std::to_string(opt.match_radius)},
                          {"colour-scale", text(opt.colour_scale)},
                          {"depth-scale", text(opt.depth_scale)},
                          {"occlusion-margin", text(opt.occlusion_margin)},
@@ -99,6 +100,8 @@ int masks(const Args& args) {
                          {"min-area", text(opt.min_area)},
                          {"depth-search", text(opt.depth_search)},
                          {"grow-depth", text(opt.grow_depth)},
+                         {"grow-limit", text(opt.grow_limit)},
+                         {"min-track-frames", text(opt.min_track_frames)},
                          {"global-fit", "off"},
                          {"out", ""},
                          {"no-grabcut", "off"}});
@@ -110,6 +113,7 @@ int masks(const Args& args) {
   opt.offsets.clear();
   for (long v : o.integers("offsets")) opt.offsets.push_back(int(v));
   opt.colour_scale = std::stod(o.str("colour-scale"));
+  opt.match_radius = int(o.integer("match-radius"));
   opt.depth_scale = std::stod(o.str("depth-scale"));
   opt.occlusion_margin = std::stod(o.str("occlusion-margin"));
   opt.threshold_floor = std::stod(o.str("threshold-floor"));
@@ -117,6 +121,8 @@ int masks(const Args& args) {
   opt.min_area = std::stod(o.str("min-area"));
   opt.depth_search = std::stod(o.str("depth-search"));
   opt.grow_depth = std::stod(o.str("grow-depth"));
+  opt.grow_limit = std::stod(o.str("grow-limit"));
+  opt.min_track_frames = std::stod(o.str("min-track-frames"));
   opt.per_frame_fit = !o.flag("global-fit");
   opt.grabcut = !o.flag("no-grabcut");
   std::vector<Score> scores;

@@ -1,5 +1,6 @@
 // nova masks (include/nova/io/motion_masks.hpp): the reprojection against a float64
-// reference, the masks of the tiny synthetic scene against its exact masks, and bad input
+// reference, the masks of the tiny synthetic scene against its exact masks, the growth over
+// the depth's surfaces on a made-up depth, and bad input
 // (missing disparity or poses, a static video, nothing left behind on failure).
 #include <boost/test/unit_test.hpp>
 #include <cmath>
@@ -110,6 +111,32 @@ BOOST_AUTO_TEST_CASE(tiny_scene_masks_match_exact_masks) {
   // other compilers' and OpenCV builds' rounding in the fit, the threshold and GrabCut.
   BOOST_TEST(mean >= 0.65);
   BOOST_TEST(m.objects() >= 1);
+}
+
+// Growth over the depth's surfaces on a made-up inverse depth: a wall at 0.5 and, in front of
+// it, a 30 x 60 "person" at 0.8 with a gentle ramp (0.0005 per row, 0.06 % per pixel, under the
+// 0.5 % step) that touches the bottom edge. Exact integer areas: nothing here is rounded.
+BOOST_AUTO_TEST_CASE(growth_takes_the_seeds_surface_and_not_the_wall) {
+  cv::Mat w(80, 100, CV_32F, cv::Scalar(0.5));
+  const cv::Rect person(30, 20, 30, 60);
+  for (int y = person.y; y < person.y + person.height; ++y)
+    for (int x = person.x; x < person.x + person.width; ++x) w.at<float>(y, x) = 0.8f + 0.0005f * float(y);
+  // A 20 x 20 seed on the person's top (a moving head): the whole person, not a pixel of wall
+  // (1400 added: under 6 x 400 and a quarter of the frame, 2000).
+  cv::Mat seed(w.size(), CV_8U, cv::Scalar(0));
+  seed(cv::Rect(35, 20, 20, 20)).setTo(255);
+  cv::Mat grown = nova::masks::grow_on_depth(seed, w, 0.005, 6.0);
+  cv::Mat want(w.size(), CV_8U, cv::Scalar(0));
+  want(person).setTo(255);
+  BOOST_TEST(cv::countNonZero(grown != want) == 0);
+  // A 10 x 10 seed on the wall (a false region) would take the whole wall: it stays as it is.
+  cv::Mat wall_seed(w.size(), CV_8U, cv::Scalar(0));
+  wall_seed(cv::Rect(80, 5, 10, 10)).setTo(255);
+  grown = nova::masks::grow_on_depth(wall_seed, w, 0.005, 6.0);
+  BOOST_TEST(cv::countNonZero(grown != wall_seed) == 0);
+  // Both at once: each part decides alone.
+  grown = nova::masks::grow_on_depth(seed | wall_seed, w, 0.005, 6.0);
+  BOOST_TEST(cv::countNonZero(grown != (want | wall_seed)) == 0);
 }
 
 BOOST_AUTO_TEST_CASE(missing_disparity_or_poses_is_named_and_nothing_is_written) {

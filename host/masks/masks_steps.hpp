@@ -1,6 +1,6 @@
 #pragma once
 // The steps of make_motion_masks (include/nova/io/motion_masks.hpp), one file each:
-// reprojection.cpp (frames as float images, the pair geometry), depth_fit.cpp, motion_score.cpp,
+// reprojection.cpp (frames as float images, the pair geometry, the fitted depth), motion_score.cpp,
 // segment.cpp (threshold, clean-up, GrabCut) and tracks.cpp (objects through time).
 #include <opencv2/core.hpp>
 #include <string>
@@ -11,11 +11,10 @@
 namespace nova::masks {
 
 // A frame as the steps use it: colour as float (each channel divided by twice its frame mean,
-// so a global exposure change cancels), the same blurred for the depth fit, the disparity and,
-// once fitted, the inverse depth.
+// so a global exposure change cancels), the disparity and, once fitted (nova's fit_disparity),
+// the inverse depth.
 struct FrameData {
   cv::Mat rgb;       // CV_32FC3
-  cv::Mat rgb_blur;  // CV_32FC3, Gaussian sigma 1.5
   cv::Mat disp;      // CV_32F
   cv::Mat inv_depth; // CV_32F, after the fit
   Camera camera;
@@ -53,7 +52,6 @@ bool sample_bilinear(const cv::Mat& image, double x, double y, float* out);
 // The neighbours of frame i: i - o and i + o for each offset that stays inside [0, n).
 std::vector<int> neighbours(int i, int n, const std::vector<int>& offsets);
 
-DepthFit fit_depth(std::vector<FrameData>& frames, double near, const MotionMaskOptions& options);
 // inv_depth of every frame from its disparity and the fit.
 void apply_depth(std::vector<FrameData>& frames, const DepthFit& fit);
 
@@ -67,7 +65,9 @@ double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptio
 // depth's smooth surfaces (options.grow_depth), GrabCut.
 cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame, const cv::Mat& inv_depth,
                       const MotionMaskOptions& options);
-cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step);
+// Each connected part of `region` grown over pixels whose inverse depth changes by less than
+// `step` (relative) from pixel to pixel, unless it would grow past `max_growth` times its area.
+cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step, double max_growth);
 // Drops connected regions under `min_pixels` and fills enclosed holes (CV_8U, 255 inside).
 cv::Mat clean_region(const cv::Mat& region, int min_pixels);
 

@@ -11,6 +11,7 @@
 
 #include "data/fs_util.hpp"
 #include "masks/masks_steps.hpp"
+#include "nova/disparity_fit.hpp"
 #include "nova/error.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/io/visualize.hpp"
@@ -49,15 +50,26 @@ MotionMasks make_motion_masks(const Scene& scene, const MotionMaskOptions& optio
   auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   MotionMasks out;
   std::vector<masks::FrameData> frames = masks::prepare_frames(scene);
-  double near = 1e300;
-  for (const Frame& f : scene.frames) near = std::min(near, f.near > 0 ? f.near : 1.0);
-
-  out.depth = masks::fit_depth(frames, near, options);
+  {
+    // nova's disparity fit (disparity_fit.hpp) on every pixel: there are no masks yet, and its
+    // truncated colour error keeps the moving pixels' pull small.
+    DisparityFitOptions fo;
+    fo.use_masks = false;
+    fo.per_frame = options.per_frame_fit;
+    const DisparityFit f = fit_disparity(scene, fo);
+    if (f.scale == 0 && f.shift == 0)  // fit_disparity gave up before searching
+      throw Error(scene.source + "/disp: the disparity maps are flat or not finite: no depth to place pixels at");
+    out.depth.global_scale = f.scale, out.depth.global_shift = f.shift, out.depth.cost = f.cost;
+    out.depth.parallax = f.ok;
+    out.depth.scale = options.per_frame_fit ? f.frame_scale : std::vector<double>(size_t(n), f.scale);
+    out.depth.shift = options.per_frame_fit ? f.frame_shift : std::vector<double>(size_t(n), f.shift);
+  }
   masks::apply_depth(frames, out.depth);
   {
     std::ostringstream s;
     s << "depth: inverse depth = " << out.depth.global_scale << " disparity + " << out.depth.global_shift
-      << " (colour error " << out.depth.cost << ")" << (options.per_frame_fit ? ", refined per frame" : "");
+      << " (colour error " << out.depth.cost << ")" << (options.per_frame_fit ? ", refined per frame" : "")
+      << (out.depth.parallax ? "" : "; warning: no better than a constant depth (too little parallax to place the disparity)");
     out.notes.push_back(s.str());
     char t[64];
     std::snprintf(t, sizeof t, " (%.1f s)", seconds());

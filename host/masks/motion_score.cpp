@@ -22,6 +22,7 @@ cv::Mat motion_score(const std::vector<FrameData>& frames, int i, const MotionMa
   for (int k = 0; k < steps; ++k)
     factors.push_back(steps == 1 ? 1.0 : 1.0 + options.depth_search * (2.0 * k / (steps - 1) - 1.0));
   std::vector<float> per;
+  const int R = options.match_radius > 0 ? options.match_radius : std::max(1, int(std::lround(w / 240.0)));
   for (int y = 0; y < h; ++y) {
     const cv::Vec3f* src = f.rgb.ptr<cv::Vec3f>(y);
     const float* wsrc = f.inv_depth.ptr<float>(y);
@@ -38,15 +39,15 @@ cv::Mat motion_score(const std::vector<FrameData>& frames, int i, const MotionMa
           if (!sample_bilinear(g_frame->inv_depth, bx, by, &wj)) continue;
           // Something nearer stands there in the neighbour: it cannot see this point.
           if (wj > bw * (1 + options.occlusion_margin)) continue;
-          // Colour and depth over the 3 x 3 pixels around the landing point: the best colour
-          // match and the nearest surface, so that a pixel of misplacement is no motion.
+          // Colour and depth over the (2R + 1)^2 pixels around the landing point: the best colour
+          // match and the nearest surface, so that R pixels of misplacement are no motion.
           const int cx = int(std::lround(bx)), cy = int(std::lround(by));
           float colour = 1e9f, nearest = 0;
-          for (int dy = -1; dy <= 1; ++dy) {
+          for (int dy = -R; dy <= R; ++dy) {
             const int yy = std::clamp(cy + dy, 0, h - 1);
             const cv::Vec3f* row = g_frame->rgb.ptr<cv::Vec3f>(yy);
             const float* wrow = g_frame->inv_depth.ptr<float>(yy);
-            for (int dx = -1; dx <= 1; ++dx) {
+            for (int dx = -R; dx <= R; ++dx) {
               const int xx = std::clamp(cx + dx, 0, w - 1);
               const cv::Vec3f d = row[xx] - src[x];
               colour = std::min(colour, (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2])) / 3);

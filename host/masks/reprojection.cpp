@@ -1,4 +1,4 @@
-// Frames as float images and the geometry of a pair of cameras (masks_steps.hpp).
+// Frames as float images, the geometry of a pair of cameras and the fitted depth (masks_steps.hpp).
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -21,7 +21,6 @@ std::vector<FrameData> prepare_frames(const Scene& scene) {
     cv::split(d.rgb, ch);
     for (int c = 0; c < 3; ++c) ch[size_t(c)] *= 0.5 / std::max(mean[c], 1e-3);
     cv::merge(ch, d.rgb);
-    cv::GaussianBlur(d.rgb, d.rgb_blur, cv::Size(0, 0), 1.5);
     d.disp = cv::Mat(f.disparity.height, f.disparity.width, CV_32F,
                      const_cast<float*>(f.disparity.data.data())).clone();
     out.push_back(std::move(d));
@@ -61,6 +60,13 @@ bool sample_bilinear(const cv::Mat& image, double x, double y, float* out) {
     out[k] = top + fy * (bottom - top);
   }
   return true;
+}
+
+void apply_depth(std::vector<FrameData>& frames, const DepthFit& fit) {
+  for (size_t i = 0; i < frames.size(); ++i) {
+    frames[i].disp.convertTo(frames[i].inv_depth, CV_32F, fit.scale[i], fit.shift[i]);
+    cv::max(frames[i].inv_depth, 1e-4, frames[i].inv_depth);
+  }
 }
 
 std::vector<int> neighbours(int i, int n, const std::vector<int>& offsets) {

@@ -30,12 +30,14 @@ class ProjectionCost {
   const std::vector<Sample>& samples() const { return samples_; }
 
   // Mean truncated colour difference of every sample placed at w = a d + b and seen from its
-  // neighbours; samples a neighbour sees inside an object mask are not compared there.
-  double operator()(double a, double b) const {
+  // neighbours; samples a neighbour sees inside an object mask are not compared there. Only
+  // frame `only`'s samples where it is >= 0.
+  double operator()(double a, double b, int only = -1) const {
     double sum = 0;
     size_t count = 0;
     const int F = static_cast<int>(scene_.frames.size());
     for (const Sample& s : samples_) {
+      if (only >= 0 && s.frame != only) continue;
       const double w = a * s.disparity + b;
       const Frame& f = scene_.frames[static_cast<size_t>(s.frame)];
       for (int d : o_.neighbours) {
@@ -54,7 +56,7 @@ class ProjectionCost {
           ++count;
           continue;
         }
-        if (fg.masks.at(0).at(static_cast<int>(std::lround(p[0])), static_cast<int>(std::lround(p[1]))) < 128) continue;
+        if (o_.use_masks && fg.masks.at(0).at(static_cast<int>(std::lround(p[0])), static_cast<int>(std::lround(p[1]))) < 128) continue;
         double diff = 0;
         for (int c = 0; c < 3; ++c) diff += std::fabs(pg.sample(p[0], p[1], c) - s.colour[c]);
         sum += std::min(diff / 3, o_.truncate);
@@ -78,7 +80,7 @@ class ProjectionCost {
     for (int y = 2; y < H - 2; y += stride)
       for (int x = 2; x < W - 2; x += stride) {
         bool background = true;
-        for (int dy = -2; dy <= 2 && background; ++dy)
+        for (int dy = -2; dy <= 2 && background && o_.use_masks; ++dy)
           for (int dx = -2; dx <= 2 && background; ++dx) background = bg.at(x + dx, y + dy) >= 128;
         const float d = f.disparity.data[static_cast<size_t>(y) * f.disparity.width + x];
         if (!background || !std::isfinite(d)) continue;
@@ -150,22 +152,30 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
         bv = v;
       }
     }
-  for (double h = step / 2; h > step / 64; h /= 2) {
-    bool moved = true;
-    while (moved) {
-      moved = false;
-      for (const auto& [du, dv] : {std::pair{h, 0.0}, {-h, 0.0}, {0.0, h}, {0.0, -h}, {h, h}, {-h, -h}}) {
-        if (bv + dv < bu + du) continue;
-        const double c = eval(bu + du, bv + dv);
-        if (c < best) {
-          best = c;
-          bu += du;
-          bv += dv;
-          moved = true;
+  // Pattern search from (u, v) with steps h0 / 2^k down to h0 / 32, on frame `only`'s samples
+  // (all where < 0).
+  auto refine = [&](double& u, double& v, double c0, double h0, int only) {
+    double c_best = c0;
+    for (double h = h0; h > h0 / 32; h /= 2) {
+      bool moved = true;
+      while (moved) {
+        moved = false;
+        for (const auto& [du, dv] : {std::pair{h, 0.0}, {-h, 0.0}, {0.0, h}, {0.0, -h}, {h, h}, {-h, -h}}) {
+          if (v + dv < u + du) continue;
+          const auto [a, b] = line(u + du, v + dv);
+          const double c = cost(a, b, only);
+          if (c < c_best) {
+            c_best = c;
+            u += du;
+            v += dv;
+            moved = true;
+          }
         }
       }
     }
-  }
+    return c_best;
+  };
+  best = refine(bu, bv, best, step / 2, -1);
   const auto [a, b] = line(bu, bv);
   fit.scale = a;
   fit.shift = b;
@@ -173,6 +183,15 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
   // A fit no better than some constant depth says the frames show too little parallax to
   // place the disparity (a tripod shot): no fit.
   fit.ok = a > 0 && best < 0.98 * best_constant;
+  if (options.per_frame)
+    for (int i = 0; i < static_cast<int>(scene.frames.size()); ++i) {
+      double u = bu, v = bv;
+      const auto [a0, b0] = line(u, v);
+      refine(u, v, cost(a0, b0, i), step / 4, i);
+      const auto [ai, bi] = line(u, v);
+      fit.frame_scale.push_back(ai);
+      fit.frame_shift.push_back(bi);
+    }
   return fit;
 }
 

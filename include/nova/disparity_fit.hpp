@@ -5,6 +5,8 @@
 // frames (whose cameras are known) and compared there by colour; the (scale, shift) whose
 // projections match best wins. It needs no trained NeRF: a NeRF's rendered depth is biased
 // where it keeps faint density in front of a surface.
+#include <vector>
+
 #include "nova/scene.hpp"
 
 namespace nova {
@@ -15,6 +17,10 @@ struct DisparityFit {
   double shift = 0;
   double cost = 0;      // mean truncated colour difference of the projections at the fit
   int samples = 0;      // background pixels compared
+  // With DisparityFitOptions::per_frame: each frame's own (scale, shift), refined from the
+  // global fit on that frame's samples alone (monocular networks scale every frame their own
+  // way); empty otherwise.
+  std::vector<double> frame_scale, frame_shift;
 
   double inverse_depth(double disparity) const { return scale * disparity + shift; }
 };
@@ -24,6 +30,9 @@ struct DisparityFitOptions {
   std::vector<int> neighbours{-4, -2, -1, 1, 2, 4};  // frame offsets each sample is compared in
   double blur_px = 1.0;               // at 160 px width, scaled with the frames
   double truncate = 0.15;             // a colour difference counts at most this much (occlusions)
+  bool use_masks = true;              // sample the background (masks[0]) only; false: every pixel
+                                      // (no masks yet: the truncation keeps moving pixels' pull small)
+  bool per_frame = false;             // also refine a (scale, shift) per frame (frame_scale, frame_shift)
 };
 
 DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& options = {});
