@@ -75,7 +75,7 @@ BOOST_AUTO_TEST_CASE(reprojection_matches_float64_reference) {
     const nova::masks::PairGeometry g = nova::masks::pair_geometry(a, b);
     for (int k = 0; k < 40; ++k) {
       const double x = px(rng), y = py(rng), inv = w(rng);
-      double bx, by, bw, rx, ry, rw;
+      double bx = 0, by = 0, bw = 0, rx = 0, ry = 0, rw = 0;
       reference_reproject(a, b, x, y, inv, rx, ry, rw);
       const bool in_front = rw > 0;
       BOOST_TEST(nova::masks::reproject(g, x, y, inv, bx, by, bw) == in_front);
