@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "nova/camera.hpp"
 #include "nova/error.hpp"
 #include "nova/motion.hpp"
 #include "nova/nova_fields.hpp"
@@ -44,12 +45,8 @@ std::array<float, 2> ndc_extent(const Scene& scene) {
     const double a[2] = {-c.fx / c.cx, -c.fy / c.cy};
     for (double i : {0.0, c.width - 1.0})
       for (double j : {0.0, c.height - 1.0}) {
-        const double u = (i - c.cx) / c.fx, v = -(j - c.cy) / c.fy;
-        double d[3], o[3];
-        for (int k = 0; k < 3; ++k) {
-          d[k] = c.rotation(k, 0) * u + c.rotation(k, 1) * v - c.rotation(k, 2);
-          o[k] = c.position(k);
-        }
+        const std::array<double, 3> d = camera_ray_direction(c, i, j);
+        double o[3] = {c.position(0), c.position(1), c.position(2)};
         if (!(d[2] < 0.0)) continue;  // a ray that does not look into the scene
         const double t = -(kNear + o[2]) / d[2];
         for (int k = 0; k < 3; ++k) o[k] += t * d[k];

@@ -1,6 +1,7 @@
 // rigid_motion and motion_smoothness (motion.hpp; kernels/motion.cl), and the host maps.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "nova/error.hpp"
 #include "nova/executor.hpp"
@@ -147,6 +148,28 @@ Mat3 euler_xyz_to_matrix(const Vec3& a) {
           sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx,
           -sy,     cy * sx,                cy * cx};
 }
+
+Vec3 matrix_to_euler_xyz(const Mat3& r, const Vec3& near) {
+  using std::numbers::pi;
+  // R = Rz(c) Ry(b) Rx(a): r[6] = -sin b, r[7] = cos b sin a, r[8] = cos b cos a,
+  // r[0] = cos b cos c, r[3] = cos b sin c.
+  const double b = std::asin(std::clamp(-r[6], -1.0, 1.0));
+  const double a = std::atan2(r[7], r[8]), c = std::atan2(r[3], r[0]);
+  const Vec3 solutions[2] = {{a, b, c}, {a + pi, pi - b, c + pi}};
+  Vec3 best = solutions[0];
+  double best_distance = 1e300;
+  for (const Vec3& s : solutions) {
+    Vec3 v = s;
+    for (int k = 0; k < 3; ++k) v[k] -= 2 * pi * std::round((v[k] - near[k]) / (2 * pi));
+    const double dist = std::fabs(v[0] - near[0]) + std::fabs(v[1] - near[1]) + std::fabs(v[2] - near[2]);
+    if (dist < best_distance) {
+      best_distance = dist;
+      best = v;
+    }
+  }
+  return best;
+}
+
 
 Mat34 invert_rigid(const Mat34& m) {
   Mat34 r{};

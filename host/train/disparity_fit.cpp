@@ -135,9 +135,10 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
     const double a = (hi - lo) / (d_hi - d_lo);
     return std::pair{a, lo - a * d_lo};
   };
-  auto eval = [&](double u, double v) {
+  // The cost at (u, v), on frame `only`'s samples (all where < 0).
+  auto eval = [&](double u, double v, int only = -1) {
     const auto [a, b] = line(u, v);
-    return cost(a, b);
+    return cost(a, b, only);
   };
   constexpr int kGrid = 24;
   const double u0 = std::log(w_min), step = (std::log(w_max) - u0) / (kGrid - 1);
@@ -162,8 +163,7 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
         moved = false;
         for (const auto& [du, dv] : {std::pair{h, 0.0}, {-h, 0.0}, {0.0, h}, {0.0, -h}, {h, h}, {-h, -h}}) {
           if (v + dv < u + du) continue;
-          const auto [a, b] = line(u + du, v + dv);
-          const double c = cost(a, b, only);
+          const double c = eval(u + du, v + dv, only);
           if (c < c_best) {
             c_best = c;
             u += du;
@@ -186,8 +186,7 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
   if (options.per_frame)
     for (int i = 0; i < static_cast<int>(scene.frames.size()); ++i) {
       double u = bu, v = bv;
-      const auto [a0, b0] = line(u, v);
-      refine(u, v, cost(a0, b0, i), step / 4, i);
+      refine(u, v, eval(u, v, i), step / 4, i);
       const auto [ai, bi] = line(u, v);
       fit.frame_scale.push_back(ai);
       fit.frame_shift.push_back(bi);

@@ -13,8 +13,6 @@
 namespace nova {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 Mat3 rodrigues(const Vec3& w) {
   const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
   if (th < 1e-12) return {1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -92,8 +90,7 @@ class Aligner {
       for (int c = 0; c < 3; ++c) p.colour[static_cast<size_t>(c)] = ia.sample(p.px, p.py, c);
   }
 
-  // The residuals of every point under parameters (turn w, translation t), and their Huber
-  // weights' cost.
+  // The residuals of every point under parameters q (turn, translation): kResiduals per point.
   void residuals(const std::array<double, 6>& q, std::vector<double>& r) const {
     const Mat3 R = rodrigues({q[0], q[1], q[2]});
     const Camera& cb = *b_.camera;
@@ -107,7 +104,7 @@ class Aligner {
       }
       const auto [px, py, z] = camera_project(cb, y);
       double* ri = r.data() + i * kResiduals;
-      if (z <= 0 || px < 0 || py < 0 || px > cb.width - 1 || py > cb.height - 1) {
+      if (z <= 0 || !rgb_.contains(px, py)) {
         ri[4] = o_.mask_weight;  // left the picture: as outside the mask
         continue;
       }
@@ -140,9 +137,9 @@ class Aligner {
     return cost;
   }
 
-  double prior(const std::array<double, 6>& q) const {
-    return o_.turn_prior * static_cast<double>(points_.size()) * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-  }
+  // The turn's damping: its weight (per radian squared, for all points) and its cost.
+  double prior_weight() const { return o_.turn_prior * static_cast<double>(points_.size()); }
+  double prior(const std::array<double, 6>& q) const { return prior_weight() * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]); }
 
   // Levenberg-Marquardt at the current level from q; returns the final cost.
   double optimise(std::array<double, 6>& q, int iterations) const {
@@ -173,7 +170,7 @@ class Aligner {
             A[static_cast<size_t>(a * 6 + b)] += wi * J[i * 6 + static_cast<size_t>(a)] * J[i * 6 + static_cast<size_t>(b)];
         }
       }
-      const double pw = o_.turn_prior * static_cast<double>(points_.size());
+      const double pw = prior_weight();
       for (int a = 0; a < 3; ++a) {
         A[static_cast<size_t>(a * 7)] += pw;
         g[static_cast<size_t>(a)] -= pw * q[static_cast<size_t>(a)];
@@ -244,26 +241,6 @@ ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec
   }
   out.turn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
   return out;
-}
-
-Vec3 matrix_to_euler_xyz(const Mat3& r, const Vec3& near) {
-  // R = Rz(c) Ry(b) Rx(a): r[6] = -sin b, r[7] = cos b sin a, r[8] = cos b cos a,
-  // r[0] = cos b cos c, r[3] = cos b sin c.
-  const double b = std::asin(std::clamp(-r[6], -1.0, 1.0));
-  const double a = std::atan2(r[7], r[8]), c = std::atan2(r[3], r[0]);
-  const Vec3 solutions[2] = {{a, b, c}, {a + kPi, kPi - b, c + kPi}};
-  Vec3 best = solutions[0];
-  double best_distance = 1e300;
-  for (const Vec3& s : solutions) {
-    Vec3 v = s;
-    for (int k = 0; k < 3; ++k) v[k] -= 2 * kPi * std::round((v[k] - near[k]) / (2 * kPi));
-    const double dist = std::fabs(v[0] - near[0]) + std::fabs(v[1] - near[1]) + std::fabs(v[2] - near[2]);
-    if (dist < best_distance) {
-      best_distance = dist;
-      best = v;
-    }
-  }
-  return best;
 }
 
 }  // namespace nova

@@ -73,21 +73,15 @@ double median(std::vector<double> v) {
 // The world point of pixel (x, y) of `camera` at rendered depth `t` (NDC t in [0, 1): world
 // depth 1 / (1 - t) in front of the near plane z = -1, RayOptions; metric: the ray's length).
 Vec3 world_point(const Camera& c, double x, double y, double t, bool ndc) {
-  const double u = (x - c.cx) / c.fx, v = -(y - c.cy) / c.fy;
-  Vec3 d{}, o{};
-  for (int k = 0; k < 3; ++k) {
-    d[k] = c.rotation(k, 0) * u + c.rotation(k, 1) * v - c.rotation(k, 2);
-    o[k] = c.position(k);
-  }
+  const Vec3 d = camera_ray_direction(c, x, y);
   double s = t;
   if (ndc) {
     const double z = -1.0 / std::max(1.0 - std::clamp(t, 0.0, 0.999), 1e-3);
-    s = std::fabs(d[2]) > 1e-9 ? (z - o[2]) / d[2] : 1.0;
+    s = std::fabs(d[2]) > 1e-9 ? (z - c.position(2)) / d[2] : 1.0;
   } else {
-    const double norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    s = t / norm;
+    s = t / std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   }
-  return {o[0] + s * d[0], o[1] + s * d[1], o[2] + s * d[2]};
+  return camera_unproject(c, x, y, s);
 }
 
 // Camera-space depth of every pixel of `f` from its disparity placed by `fit` (0: unknown).

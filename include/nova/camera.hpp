@@ -26,13 +26,21 @@ struct Camera {
   double position(int r) const { return c2w[r * 4 + 3]; }
 };
 
-// The world point of pixel (x, y) at camera-space depth `depth` (the distance along the view
-// axis, -z of the camera's frame; pixel (x, y) looks along ((x - cx) / fx, -(y - cy) / fy, -1)).
-inline std::array<double, 3> camera_unproject(const Camera& c, double x, double y, double depth) {
+// The world direction pixel (x, y) looks along, at unit camera-space depth: the camera's axes
+// times ((x - cx) / fx, -(y - cy) / fy, -1).
+inline std::array<double, 3> camera_ray_direction(const Camera& c, double x, double y) {
   const double u = (x - c.cx) / c.fx, v = -(y - c.cy) / c.fy;
+  std::array<double, 3> d{};
+  for (int k = 0; k < 3; ++k) d[k] = c.rotation(k, 0) * u + c.rotation(k, 1) * v - c.rotation(k, 2);
+  return d;
+}
+
+// The world point of pixel (x, y) at camera-space depth `depth` (the distance along the view
+// axis, -z of the camera's frame).
+inline std::array<double, 3> camera_unproject(const Camera& c, double x, double y, double depth) {
+  const std::array<double, 3> d = camera_ray_direction(c, x, y);
   std::array<double, 3> p{};
-  for (int k = 0; k < 3; ++k)
-    p[k] = c.position(k) + depth * (c.rotation(k, 0) * u + c.rotation(k, 1) * v - c.rotation(k, 2));
+  for (int k = 0; k < 3; ++k) p[k] = c.position(k) + depth * d[k];
   return p;
 }
 

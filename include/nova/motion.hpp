@@ -58,6 +58,9 @@ using Mat34 = std::array<double, 12>;  // row-major [R | t]: x -> R x + t
 // R = Rz(a[2]) Ry(a[1]) Rx(a[0]), angles in radians (the composition spec's rotate= in degrees
 // is the same convention: euler_xyz_deg_to_matrix).
 Mat3 euler_xyz_to_matrix(const Vec3& angles);
+// Its inverse: of the two Euler solutions of `r` and their 2 pi shifts, the one nearest to
+// `near` (so that a trajectory's angles change smoothly).
+Vec3 matrix_to_euler_xyz(const Mat3& r, const Vec3& near);
 
 // Rigid 3x4 maps: the inverse [R^T | -R^T t], a after b (x -> a(b(x))), and a point moved.
 Mat34 invert_rigid(const Mat34& m);

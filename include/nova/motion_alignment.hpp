@@ -44,8 +44,4 @@ struct ObjectAlignment {
 ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec3& translation,
                              const AlignmentOptions& options = {});
 
-// Euler angles (Rz Ry Rx, motion.hpp) of a rotation, of the two solutions and their 2 pi
-// shifts the one nearest to `near` (so that a trajectory's angles change smoothly).
-Vec3 matrix_to_euler_xyz(const Mat3& r, const Vec3& near);
-
 }  // namespace nova
