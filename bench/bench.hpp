@@ -21,6 +21,7 @@ int accuracy(const Args& args);  // needs nova_io (scenes, metrics, pictures)
 int step(const Args& args);      // needs nova_io (the scene)
 int devices(const Args& args);   // needs nova_io (the scene, its evaluation, the plot)
 int masks(const Args& args);     // needs nova_io (nova masks against known masks)
+int motion(const Args& args);    // needs nova_io (the rigid start against the family's exact poses)
 #endif
 
 struct Benchmark {

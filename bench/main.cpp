@@ -23,6 +23,7 @@ const std::vector<Benchmark>& benchmarks() {
       {"devices", "every OpenCL device side by side: MLP speed and error against float64, a short training's speed and PSNR (table, CSV, JSON, PNG)", devices},
       {"step", "training steps per preset, phase and object count: s/step, rays/s, device memory, peak RSS, per-op tables", step},
       {"masks", "nova masks against known masks (the synthetic family's exact ones, a scene's own): IoU per frame", masks},
+      {"motion", "the rigid objects' starting motion (frame-to-frame alignment) against the synthetic family's exact poses: turn error per frame, drift", motion},
       {"view", "renders a trained run's views with early ray termination on and off: time ratio, evaluations saved", view},
 #endif
   };

@@ -1,0 +1,182 @@
+// `nova-bench motion`: the rigid objects' starting motion (motion_alignment.hpp, as
+// initial_motion chains it) against the synthetic family's exact object poses. Per seed and
+// object: the true turn per frame, the found turn's error per frame pair (mean, worst) and the
+// drift of the chained turn by the last frame that shows the object. Depth is the disparity
+// placed by fit_disparity (what training uses) or, with --exact-depth, the renders' own
+// depth: the gap between the two says how much of the error is the disparity's.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "bench.hpp"
+#include "options.hpp"
+#include "nova/camera.hpp"
+#include "nova/disparity_fit.hpp"
+#include "nova/io/scene_io.hpp"
+#include "nova/io/synth.hpp"
+#include "nova/motion_alignment.hpp"
+
+namespace nova::bench {
+namespace {
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+Mat3 multiply(const Mat3& a, const Mat3& b) {
+  Mat3 c{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int l = 0; l < 3; ++l) c[size_t(i * 3 + j)] += a[size_t(i * 3 + l)] * b[size_t(l * 3 + j)];
+  return c;
+}
+
+Mat3 transpose(const Mat3& a) {
+  Mat3 c{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) c[size_t(i * 3 + j)] = a[size_t(j * 3 + i)];
+  return c;
+}
+
+Mat3 rotation_of(const std::array<double, 12>& p) { return {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]}; }
+
+double degrees(const Mat3& r) { return std::acos(std::clamp((r[0] + r[4] + r[8] - 1) / 2, -1.0, 1.0)) / kDegree; }
+
+Vec3 centroid_at_median_depth(const Frame& f, const ImageF& depth, const Image8& mask) {
+  double cx = 0, cy = 0, n = 0;
+  std::vector<float> z;
+  for (int y = 0; y < mask.height; ++y)
+    for (int x = 0; x < mask.width; ++x)
+      if (mask.at(x, y) >= 128) {
+        cx += x, cy += y, n += 1;
+        z.push_back(depth.data[size_t(y) * depth.width + x]);
+      }
+  std::nth_element(z.begin(), z.begin() + long(z.size() / 2), z.end());
+  return camera_unproject(f.camera, cx / n, cy / n, z[z.size() / 2]);
+}
+
+int mask_pixels(const Image8& m) {
+  return int(std::count_if(m.data.begin(), m.data.end(), [](uint8_t v) { return v >= 128; }));
+}
+
+struct ObjectScore {
+  int seed = 0, object = 0, pairs = 0;
+  double true_turn = 0, mean_error = 0, worst_error = 0, drift = 0, chained_truth = 0;
+};
+
+std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact_depth) {
+  const Scene scene = load_scene(dir);
+  const SynthWorld world("family", uint32_t(seed));
+  const int F = int(scene.frames.size());
+  // The loaded world is the generator's rotated by Rc and scaled (llff_poses.hpp's transform):
+  // both read off the cameras, so the truth's turns can be written in the loaded world.
+  const Mat3 Rc = multiply(rotation_of(scene.frames[0].camera.c2w), transpose(rotation_of(world.camera(0).c2w)));
+  double scale = 1;
+  {
+    double best = 0;
+    for (int i = 1; i < F; ++i) {
+      const Camera &a = scene.frames[0].camera, &b = scene.frames[size_t(i)].camera;
+      const Camera wa = world.camera(0), wb = world.camera(i);
+      const double dw = std::hypot(wa.position(0) - wb.position(0), wa.position(1) - wb.position(1), wa.position(2) - wb.position(2));
+      if (dw > best) {
+        best = dw;
+        scale = std::hypot(a.position(0) - b.position(0), a.position(1) - b.position(1), a.position(2) - b.position(2)) / dw;
+      }
+    }
+  }
+  const DisparityFit fit = fit_disparity(scene);
+  std::vector<ImageF> depth(static_cast<size_t>(F));
+  for (int i = 0; i < F; ++i) {
+    const Frame& f = scene.frames[size_t(i)];
+    ImageF& d = depth[size_t(i)];
+    d.width = f.rgb.width;
+    d.height = f.rgb.height;
+    d.data.assign(size_t(d.width) * d.height, 0.0f);
+    if (exact_depth) {
+      const SynthRender r = world.render(world.camera(i), frame_time(i, F));
+      for (size_t p = 0; p < d.data.size(); ++p) d.data[p] = float(r.depth.data[p] * scale);
+    } else if (fit.ok) {
+      for (size_t p = 0; p < d.data.size(); ++p) {
+        const double w = fit.inverse_depth(f.disparity.data[p]);
+        if (w > 0 && std::isfinite(w)) d.data[p] = float(1 / w);
+      }
+    }
+  }
+  auto true_turn = [&](int k, int a, int b) {  // object k's turn from frame a to b, loaded world
+    const Mat3 r = multiply(rotation_of(world.object_pose(k, frame_time(b, F))),
+                            transpose(rotation_of(world.object_pose(k, frame_time(a, F)))));
+    return multiply(Rc, multiply(r, transpose(Rc)));
+  };
+  std::vector<ObjectScore> out;
+  for (int k = 1; k <= world.objects(); ++k) {
+    ObjectScore s;
+    s.seed = seed;
+    s.object = k;
+    std::vector<int> seen;
+    for (int i = 0; i < F; ++i)
+      if (mask_pixels(scene.frames[size_t(i)].masks.at(size_t(k))) >= 8) seen.push_back(i);
+    Mat3 chain{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (size_t j = 1; j < seen.size(); ++j) {
+      const int a = seen[j - 1], b = seen[j];
+      const Frame &fa = scene.frames[size_t(a)], &fb = scene.frames[size_t(b)];
+      const ObjectView va{&fa.camera, &fa.rgb, &fa.masks.at(size_t(k)), &depth[size_t(a)]};
+      const ObjectView vb{&fb.camera, &fb.rgb, &fb.masks.at(size_t(k)), &depth[size_t(b)]};
+      const Vec3 pa = centroid_at_median_depth(fa, depth[size_t(a)], *va.mask);
+      const Vec3 pb = centroid_at_median_depth(fb, depth[size_t(b)], *vb.mask);
+      const Mat3 found = rotation_of(align_object(va, vb, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}).motion);
+      const Mat3 truth = true_turn(k, a, b);
+      const double e = degrees(multiply(found, transpose(truth)));
+      s.true_turn += degrees(truth) / (b - a);
+      s.mean_error += e;
+      s.worst_error = std::max(s.worst_error, e);
+      chain = multiply(found, chain);
+      ++s.pairs;
+    }
+    if (s.pairs > 0) {
+      s.true_turn /= s.pairs;
+      s.mean_error /= s.pairs;
+      const Mat3 whole = true_turn(k, seen.front(), seen.back());
+      s.drift = degrees(multiply(chain, transpose(whole)));
+      s.chained_truth = degrees(whole);
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+int motion(const Args& args) {
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}});
+  if (o.help()) {
+    std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
+                 "renders' exact depth instead of the fitted disparity\n";
+    return 0;
+  }
+  ScratchDir scratch("motion");
+  std::printf("%5s %7s %6s %12s %11s %11s %18s %8s\n", "seed", "object", "pairs", "true deg/fr", "error mean",
+              "error worst", "drift / whole turn", "seconds");
+  double sum_error = 0, sum_drift = 0;
+  int objects = 0;
+  for (long seed : o.integers("seeds")) {
+    const auto dir = scratch / ("family" + std::to_string(seed));
+    write_synthetic_scene(dir.string(), "family", uint32_t(seed));
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"));
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    for (const ObjectScore& s : scores) {
+      std::printf("%5d %7d %6d %12.2f %11.2f %11.2f %8.1f / %7.1f %8.1f\n", s.seed, s.object, s.pairs, s.true_turn,
+                  s.mean_error, s.worst_error, s.drift, s.chained_truth, seconds);
+      if (s.pairs == 0) continue;
+      sum_error += s.mean_error;
+      sum_drift += s.drift;
+      ++objects;
+    }
+  }
+  if (objects > 0)
+    std::printf("mean over %d objects: error %.2f degrees per frame pair, drift %.1f degrees\n", objects,
+                sum_error / objects, sum_drift / objects);
+  return 0;
+}
+
+}  // namespace nova::bench
