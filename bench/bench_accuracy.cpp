@@ -14,15 +14,15 @@
 
 #include "accuracy.hpp"
 #include "bench.hpp"
-#include "nova/io/evaluation.hpp"
+#include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/data/synth.hpp"
 #include "nova/io/visualize.hpp"
-#include "nova/progress_line.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/runtime.hpp"
-#include "nova/trainer.hpp"
-#include "nova/view_renderer.hpp"
+#include "nova/train/progress_line.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/runtime/runtime.hpp"
+#include "nova/train/trainer.hpp"
+#include "nova/model/view_renderer.hpp"
 #include "options.hpp"
 
 namespace nova::bench {

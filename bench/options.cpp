@@ -3,7 +3,7 @@
 
 #include <sstream>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::bench {
 

@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "harness.hpp"
-#include "nova/runtime.hpp"
+#include "nova/runtime/runtime.hpp"
 
 using namespace nova;
 

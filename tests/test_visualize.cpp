@@ -9,7 +9,7 @@
 #include <opencv2/videoio.hpp>
 #endif
 
-#include "nova/io/image_metrics.hpp"
+#include "nova/metrics/image_metrics.hpp"
 #include "nova/io/visualize.hpp"
 #include "scene_test_util.hpp"
 

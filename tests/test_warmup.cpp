@@ -4,10 +4,10 @@
 #include <boost/test/unit_test.hpp>
 
 #include "harness.hpp"
-#include "nova/gemm.hpp"
-#include "nova/kernel_sources.hpp"
-#include "nova/render.hpp"
-#include "nova/tuning.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/runtime/kernel_sources.hpp"
+#include "nova/render/render_composite.hpp"
+#include "nova/tuning/tuning.hpp"
 
 using namespace nova;
 

@@ -13,8 +13,8 @@
 #include <opencv2/videoio.hpp>
 #endif
 
-#include "nova/error.hpp"
-#include "nova/io/image_metrics.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/metrics/image_metrics.hpp"
 
 namespace nova {
 namespace fs = std::filesystem;

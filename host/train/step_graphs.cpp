@@ -1,11 +1,11 @@
-#include "nova/step_graphs.hpp"
+#include "nova/train/step_graphs.hpp"
 
-#include "nova/error.hpp"
-#include "nova/losses.hpp"
-#include "nova/motion.hpp"
-#include "nova/ops.hpp"
-#include "nova/rays.hpp"
-#include "nova/render.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/sampling/rigid_motion.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "nova/sampling/rays.hpp"
+#include "nova/render/render_composite.hpp"
 
 namespace nova {
 namespace {

@@ -1,4 +1,4 @@
-#include "nova/train_config.hpp"
+#include "nova/train/train_config.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "runtime/parse_number.hpp"
 
 namespace nova {

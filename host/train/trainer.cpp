@@ -1,4 +1,4 @@
-#include "nova/trainer.hpp"
+#include "nova/train/trainer.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -10,11 +10,11 @@
 #include <optional>
 #include <sstream>
 
-#include "nova/augment.hpp"
-#include "nova/error.hpp"
-#include "nova/motion_init.hpp"
-#include "nova/pixel_batch.hpp"
-#include "nova/rays.hpp"
+#include "nova/train/augment.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/train/motion_init.hpp"
+#include "nova/train/pixel_batch.hpp"
+#include "nova/sampling/rays.hpp"
 
 namespace nova {
 namespace fs = std::filesystem;

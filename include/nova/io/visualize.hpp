@@ -1,14 +1,14 @@
 #pragma once
 // Turning rendered buffers into pictures and videos: RGB and grey quantisation, depth maps in
 // colour, and MP4 output. Implemented in nova_io (OpenCV); no OpenCV types here. Images are
-// RGB-interleaved Image8 as everywhere in nova (include/nova/scene.hpp); PNG output is
+// RGB-interleaved Image8 as everywhere in nova (include/nova/model/scene.hpp); PNG output is
 // nova::write_png (include/nova/io/image_io.hpp).
 #include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "nova/scene.hpp"
+#include "nova/model/scene.hpp"
 
 namespace nova {
 

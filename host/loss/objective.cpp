@@ -1,0 +1,81 @@
+// Assembles the weighted NOVA loss from its terms; a zero weight leaves its term out of the
+// graph entirely, so it costs nothing and cannot produce a gradient.
+#include "nova/loss/objective.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/runtime/error.hpp"
+
+namespace nova {
+
+NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor delta,
+                              Tensor noise, const NovelViewTargets& targets,
+                              const NovelViewLossWeights& w, const RenderOptions& options,
+                              const LossConventions& cv, GradientReducer* ranks) {
+  NovelViewLoss l;
+  std::vector<Tensor> terms;
+  std::vector<float> weights;
+  const auto add = [&](Tensor& slot, float weight, auto build) {
+    if (weight == 0.0f) return;
+    slot = build();
+    terms.push_back(slot);
+    weights.push_back(weight);
+  };
+  add(l.full_rgb, w.full_rgb, [&] { return mse(rendered.rgb, targets.rgb); });
+  add(l.nerf_rgb, w.nerf_rgb, [&] {
+    if (!cv.nerf_rgb_area) return masked_mse(rendered.nerf_rgb, targets.rgb, targets.masks);
+    const Tensor target = targets.nerf_rgb.valid() ? targets.nerf_rgb : targets.rgb;
+    return masked_mse_area(rendered.nerf_rgb, target, targets.masks, ranks);
+  });
+  add(l.mask, w.mask, [&] {
+    return cv.mask_l1 ? mask_l1_loss(rendered.mask, targets.masks) : mse(rendered.mask, targets.masks);
+  });
+  add(l.blending, w.blending, [&] { return blending_loss(raw, options.blend_sigmoid); });
+  // Without an object NeRF there is nothing to push outside a mask.
+  const size_t nerfs = rendered.mask.shape()[0];
+  add(l.alpha, nerfs > 1 ? w.alpha : 0.0f, [&] {
+    return cv.alpha_outside ? alpha_loss_outside(raw, delta, targets.masks, noise, options.blend_sigmoid, ranks)
+                            : alpha_loss(raw, delta, targets.masks, noise, options.blend_sigmoid);
+  });
+  add(l.sparsity, nerfs > 1 ? w.sparsity : 0.0f,
+      [&] { return sparsity_loss(raw, delta, targets.masks, noise); });
+  add(l.order, nerfs > 1 ? w.order : 0.0f, [&] {
+    if (!rendered.nerf_depth.valid())
+      throw Error("novel_view_loss: the order loss needs nerf_depth (RenderOptions::nerf_depth)",
+                  kExitInternal);
+    return order_loss(rendered.nerf_depth, targets.masks, ranks);
+  });
+  if (terms.empty()) throw Error("novel_view_loss: every loss weight is 0", kExitUsage);
+  l.total = weighted_sum(terms, weights);
+  return l;
+}
+
+LossConventions reference_conventions() {
+  LossConventions c;
+  c.mask_l1 = true;
+  c.nerf_rgb_area = true;
+  c.alpha_outside = true;
+  c.mask_sum = true;
+  c.blend_eps = 1e-8f;
+  c.pretrain_plain = true;
+  return c;
+}
+
+RenderOptions joint_render_options(const LossConventions& c, const NovelViewLossWeights& w) {
+  RenderOptions o;
+  o.blend_eps = c.blend_eps;
+  o.alpha_full_sum = c.mask_sum;
+  o.nerf_depth = w.order > 0.0f;
+  return o;
+}
+
+RenderOptions pretrain_render_options(const LossConventions& c) {
+  RenderOptions o;
+  o.blend_eps = c.blend_eps;
+  o.no_blend = c.pretrain_plain;
+  return o;
+}
+
+Tensor pretrain_rgb_loss(Tensor rgb, Tensor target, Tensor background) {
+  return background.valid() ? masked_mse(rgb, target, background) : mse(rgb, target);
+}
+
+}  // namespace nova
