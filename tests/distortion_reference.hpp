@@ -1,5 +1,5 @@
 #pragma once
-// Float64 reference of the distortion loss (include/nova/loss/terms.hpp, kernels/distortion.cl):
+// Float64 reference of the distortion loss (include/nova/loss/terms.hpp, kernels/distortion_loss.cl):
 // every sample pair summed directly (the kernel walks prefix sums), and the inputs the tests
 // draw for it.
 #include <algorithm>

@@ -1,5 +1,5 @@
 #pragma once
-// Float64 reference of the free-space loss (include/nova/loss/terms.hpp, kernels/free_space.cl),
+// Float64 reference of the free-space loss (include/nova/loss/terms.hpp, kernels/free_space_loss.cl),
 // its central differences, and one device run of the op on the same case.
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The distortion loss (kernels/distortion.cl): a ray's weight spread along its depth.
+// The distortion loss (kernels/distortion_loss.cl): a ray's weight spread along its depth.
 #include "nova/graph/executor.hpp"
 #include "nova/loss/terms.hpp"
 #include "nova/render/render_composite.hpp"
@@ -17,7 +17,7 @@ class DistortionLossOp final : public Op {
   cl_mem noise(ExecContext& ctx) const { return noise_ ? ctx.in(mask_ ? 4 : 3) : ctx.in(0); }
 
   void forward(ExecContext& ctx) override {
-    ctx.launch("distortion", "distortion_partial")
+    ctx.launch("distortion_loss", "distortion_partial")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(noise(ctx)).arg(mask(ctx))
         .arg(ctx.workspace()).arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
         .arg(detail::u32(l_.samples, "samples")).arg(detail::u32(l_.channels, "channels"))
@@ -30,7 +30,7 @@ class DistortionLossOp final : public Op {
   void backward(ExecContext& ctx) override {
     cl_mem gl = ctx.grad_out(0), g = ctx.grad_in(0);
     if (!gl || !g) return;
-    ctx.launch("distortion", "distortion_backward")
+    ctx.launch("distortion_loss", "distortion_backward")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(noise(ctx)).arg(mask(ctx)).arg(gl)
         .arg(ctx.workspace()).arg(g).arg(detail::u32(l_.nerfs, "nerfs"))
         .arg(detail::u32(l_.rays, "rays")).arg(detail::u32(l_.samples, "samples"))

@@ -1,4 +1,4 @@
-// The free-space loss (kernels/free_space.cl): weight in front of the surface the disparity
+// The free-space loss (kernels/free_space_loss.cl): weight in front of the surface the disparity
 // puts on each ray.
 #include <cmath>
 
@@ -20,7 +20,7 @@ class FreeSpaceLossOp final : public Op {
 
   void forward(ExecContext& ctx) override {
     fit_disparity(ctx, l_.pairs());
-    ctx.launch("free_space", "free_space_partial")
+    ctx.launch("free_space_loss", "free_space_partial")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.in(4)).arg(ctx.in(5))
         .arg(ctx.in(6)).arg(noise(ctx)).arg(ctx.workspace())
         .arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
@@ -39,7 +39,7 @@ class FreeSpaceLossOp final : public Op {
     cl_mem dp = ctx.grad_in(3);
     const bool clear_dp = dp && !ctx.accumulate_in(3);
     fit_disparity(ctx, l_.pairs() * l_.samples);
-    ctx.launch("free_space", "free_space_backward")
+    ctx.launch("free_space_loss", "free_space_backward")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.in(4)).arg(ctx.in(5))
         .arg(ctx.in(6)).arg(noise(ctx)).arg(gl).arg(ctx.workspace()).arg(g)
         .arg(dp ? dp : g).arg(detail::u32(l_.nerfs, "nerfs")).arg(detail::u32(l_.rays, "rays"))
@@ -69,7 +69,7 @@ class FreeSpaceLossOp final : public Op {
           .arg(detail::u32(at, "free-space workspace")).run(1);
       return;
     }
-    ctx.launch("free_space", "free_space_fit")
+    ctx.launch("free_space_loss", "free_space_fit")
         .arg(ctx.in(3)).arg(ctx.in(4)).arg(ctx.in(5)).arg(ctx.in(6)).arg(ctx.workspace())
         .arg(detail::u32(at, "free-space workspace")).arg(detail::u32(l_.rays, "rays")).run(1);
   }

@@ -1,6 +1,6 @@
 #pragma once
 // The reference code's ratio losses (masked_mse_area, alpha_loss_outside, order_loss: each
-// sum_g num_g / (den_g + eps) / c, kernels/refloss.cl) in two steps, for data-parallel
+// sum_g num_g / (den_g + eps) / c, kernels/reference_terms.cl) in two steps, for data-parallel
 // training: a rank's sums, which rank_sum makes the whole batch's, then the loss from them.
 #include "nova/graph/graph.hpp"
 

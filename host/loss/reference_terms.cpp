@@ -1,4 +1,4 @@
-// The novel-view loss terms as the public reference code normalises them (kernels/refloss.cl,
+// The novel-view loss terms as the public reference code normalises them (kernels/reference_terms.cl,
 // LossConventions in novel_view_loss.hpp): per-NeRF L1 mask loss, per-NeRF masked RGB over the mask
 // area, alpha loss over the rays outside each object's mask, and the order loss. Each forward
 // is a deterministic two-stage sum; each backward recomputes the sums it divides by and is
@@ -17,10 +17,10 @@ namespace {
 using detail::require_data;
 using detail::bad_op;
 
-constexpr const char* kFamily = "refloss";
+constexpr const char* kFamily = "reference_terms";
 
 // A loss sum_g num_g / (den_g + eps) / c whose partial sums come from one kernel: the
-// finish and the backward factors are shared (refloss.cl, "group ratio"). With `sums` the op
+// finish and the backward factors are shared (reference_terms.cl, "group ratio"). With `sums` the op
 // stops at the sums: its output is [2 groups], (num_g, den_g) per group.
 class GroupRatioOp : public Op {
  public:

@@ -1,4 +1,4 @@
-// rigid_motion and motion_smoothness (motion.hpp; kernels/motion.cl), and the host maps.
+// rigid_motion and motion_smoothness (motion.hpp; kernels/rigid_motion.cl), and the host maps.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -24,7 +24,7 @@ class RigidMotionOp final : public Op {
   void forward(ExecContext& ctx) override {
     const size_t rows = ctx.in_rows(0, rows_);
     if (rows == 0) return;
-    ctx.launch("motion", "rigid_motion_forward")
+    ctx.launch("rigid_motion", "rigid_motion_forward")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.out(0))
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows")).arg(frames())
         .arg(static_cast<int>(o_.ndc)).arg(o_.ax).arg(o_.ay).arg(o_.ndc_near)
@@ -40,12 +40,12 @@ class RigidMotionOp final : public Op {
       if (!ctx.accumulate_in(2)) ctx.rt.fill_zero(dm, nets_ * o_.frames * kMotionCols * sizeof(float));
       return;
     }
-    ctx.launch("motion", "rigid_motion_row_grad")
+    ctx.launch("rigid_motion", "rigid_motion_row_grad")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(dy).arg(ctx.workspace())
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows")).arg(frames())
         .arg(static_cast<int>(o_.ndc)).arg(o_.ax).arg(o_.ay).arg(o_.ndc_near)
         .run(nets_ * rows);
-    ctx.launch("motion", "rigid_motion_param_grad")
+    ctx.launch("rigid_motion", "rigid_motion_param_grad")
         .arg(ctx.workspace()).arg(ctx.in(1)).arg(dm).arg(detail::u32(nets_, "networks"))
         .arg(detail::u32(rows, "rows")).arg(frames()).arg(static_cast<int>(ctx.accumulate_in(2)))
         .run(nets_ * kMotionCols);
@@ -69,7 +69,7 @@ class MotionSmoothnessOp final : public Op {
   MotionSmoothnessOp(size_t nets, int frames) : nets_(nets), frames_(static_cast<unsigned>(frames)) {}
   std::string type() const override { return "motion_smoothness"; }
   void forward(ExecContext& ctx) override {
-    ctx.launch("motion", "motion_smoothness_forward")
+    ctx.launch("rigid_motion", "motion_smoothness_forward")
         .arg(ctx.in(0)).arg(ctx.out(0)).arg(detail::u32(nets_, "networks")).arg(frames_).run(1);
   }
   void backward(ExecContext& ctx) override {
@@ -80,7 +80,7 @@ class MotionSmoothnessOp final : public Op {
       if (!ctx.accumulate_in(0)) ctx.rt.fill_zero(dm, n * sizeof(float));
       return;
     }
-    ctx.launch("motion", "motion_smoothness_backward")
+    ctx.launch("rigid_motion", "motion_smoothness_backward")
         .arg(ctx.in(0)).arg(dl).arg(dm).arg(detail::u32(nets_, "networks")).arg(frames_)
         .arg(static_cast<int>(ctx.accumulate_in(0)))
         .run(n);

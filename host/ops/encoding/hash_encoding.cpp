@@ -1,4 +1,4 @@
-// The multiresolution hash encoding op (kernels/hashgrid.cl).
+// The multiresolution hash encoding op (kernels/hash_encoding.cl).
 #include <algorithm>
 #include <cmath>
 
@@ -25,7 +25,7 @@ class HashEncodingOp final : public Op {
     const size_t rows = ctx.in_rows(0, rows_);
     if (rows == 0) return;
     upload_resolutions(ctx.rt);
-    ctx.launch("hashgrid", "hashgrid_forward", build_options())
+    ctx.launch("hash_encoding", "hashgrid_forward", build_options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.out(0))
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
@@ -46,7 +46,7 @@ class HashEncodingOp final : public Op {
       backward_atomic(ctx, dy, dtable);
       return;
     }
-    ctx.launch("hashgrid", "hashgrid_backward", build_options())
+    ctx.launch("hash_encoding", "hashgrid_backward", build_options())
         .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(dtable)
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(ctx.in_rows(0, rows_), "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
@@ -70,7 +70,7 @@ class HashEncodingOp final : public Op {
       return;
     }
     upload_resolutions(ctx.rt);
-    ctx.launch("hashgrid", "hashgrid_backward_positions", build_options())
+    ctx.launch("hash_encoding", "hashgrid_backward_positions", build_options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(dp)
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
@@ -98,16 +98,16 @@ class HashEncodingOp final : public Op {
     const size_t parts = detail::reduction_parts(n);
     if (absmax_.bytes() < parts * sizeof(float)) absmax_ = ctx.rt.alloc(parts * sizeof(float));
     const std::string opts = build_options();
-    ctx.launch("hashgrid", "hashgrid_absmax_partial", opts)
+    ctx.launch("hash_encoding", "hashgrid_absmax_partial", opts)
         .arg(dy).arg(absmax_).arg(detail::u32(n, "encoding gradients")).arg(detail::u32(parts, "parts")).run(parts);
-    ctx.launch("hashgrid", "hashgrid_absmax_finish", opts).arg(absmax_).arg(detail::u32(parts, "parts")).run(1);
+    ctx.launch("hash_encoding", "hashgrid_absmax_finish", opts).arg(absmax_).arg(detail::u32(parts, "parts")).run(1);
     ctx.rt.fill_zero(ctx.workspace(), table_entries() * sizeof(int64_t));
-    ctx.launch("hashgrid", "hashgrid_backward_atomic", opts)
+    ctx.launch("hash_encoding", "hashgrid_backward_atomic", opts)
         .arg(ctx.in(0)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.workspace()).arg(absmax_)
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
         .run(nets_ * rows * c_.levels);
-    ctx.launch("hashgrid", "hashgrid_backward_fixed_to_float", opts)
+    ctx.launch("hash_encoding", "hashgrid_backward_fixed_to_float", opts)
         .arg(ctx.workspace()).arg(absmax_).arg(dtable).arg(detail::u32(table_entries(), "table entries"))
         .arg(detail::u32(rows, "rows")).arg(static_cast<int>(ctx.accumulate_in(1)))
         .run(table_entries());

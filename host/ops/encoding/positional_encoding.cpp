@@ -14,7 +14,7 @@ class PositionalEncodingOp final : public Op {
   void forward(ExecContext& ctx) override {
     const size_t rows = ctx.in_rows(0, rows_);
     if (rows == 0) return;
-    ctx.launch("encoding", "posenc_forward")
+    ctx.launch("positional_encoding", "posenc_forward")
         .arg(ctx.in(0)).arg(ctx.out(0)).arg(detail::u32(rows, "rows"))
         .arg(detail::u32(dims_, "dims")).arg(static_cast<unsigned>(freqs_))
         .run(rows * dims_);
@@ -24,7 +24,7 @@ class PositionalEncodingOp final : public Op {
     cl_mem dy = ctx.grad_out(0), dp = ctx.grad_in(0);
     const size_t rows = ctx.in_rows(0, rows_);
     if (!dy || !dp || rows == 0) return;
-    ctx.launch("encoding", "posenc_backward")
+    ctx.launch("positional_encoding", "posenc_backward")
         .arg(ctx.in(0)).arg(dy).arg(dp).arg(detail::u32(rows, "rows"))
         .arg(detail::u32(dims_, "dims")).arg(static_cast<unsigned>(freqs_))
         .arg(static_cast<int>(ctx.accumulate_in(0)))

@@ -26,13 +26,13 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
   } else if (row_walk) {
     const bool write_dh = dh && n > 0;
     const size_t chunks = (s.cols + kRowWalkColumns - 1) / kRowWalkColumns;
-    ctx.launch("activation", "bias_grad_rows", options)
+    ctx.launch("bias_act", "bias_grad_rows", options)
         .arg(y).arg(dy).arg(partials).arg(write_dh ? dh : partials).arg(u32(s.rows, "rows"))
         .arg(u32(s.cols, "cols")).arg(u32(s.batch, "batches")).arg(u32(parts, "parts"))
         .arg(static_cast<int>(write_dh)).arg(static_cast<int>(acc_dh))
         .run2(s.batch * chunks, 1, 1, 1);
   } else if (db) {
-    ctx.launch("activation", "bias_grad_partial", options)
+    ctx.launch("bias_act", "bias_grad_partial", options)
         .arg(y).arg(dy).arg(partials).arg(u32(s.rows, "rows"))
         .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
         .run2(bc, parts);
@@ -43,14 +43,14 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
         .arg(static_cast<int>(acc_db))
         .run(bc);
   if (dh && n > 0 && !row_walk)
-    ctx.launch("activation", "bias_act_backward", options)
+    ctx.launch("bias_act", "bias_act_backward", options)
         .arg(y).arg(dy).arg(dh).arg(u32(n, "bias_act size")).arg(static_cast<int>(acc_dh))
         .run(n);
 }
 
 void bias_act_forward(Runtime& rt, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y) {
   if (s.batch * s.rows * s.cols == 0) return;
-  rt.launch("activation", "bias_act_forward", activation_options(act))
+  rt.launch("bias_act", "bias_act_forward", activation_options(act))
       .arg(h).arg(b).arg(y).arg(u32(s.cols, "cols")).arg(u32(s.rows, "rows"))
       .arg(u32(s.batch * s.rows, "bias_act rows"))
       .run2(s.cols, s.batch * s.rows);

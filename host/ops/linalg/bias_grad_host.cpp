@@ -1,5 +1,5 @@
 // bias_act's backward as a host function on a CPU device's queue (BiasGradWalk::Host): the
-// sums of kernels/activation.cl's bias_grad_rows, bit for bit, walking whole rows in order.
+// sums of kernels/bias_act.cl's bias_grad_rows, bit for bit, walking whole rows in order.
 // The kernel gives each work-item eight columns, so every work-item reads 32 bytes of each
 // row and the prefetchers see short strided streams; here each thread reads its own
 // contiguous share of every row.

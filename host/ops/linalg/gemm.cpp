@@ -50,7 +50,7 @@ Launch& epilogue_args(Launch& l, const GemmArgs& g, const GemmEpilogue& e) {
   return l.arg(e.bias ? e.bias : g.c).arg(detail::u32(e.stride_bias, "gemm bias stride"));
 }
 
-// The epilogue as a pass of its own over C (a provider that cannot fuse it): activation.cl's
+// The epilogue as a pass of its own over C (a provider that cannot fuse it): bias_act.cl's
 // bias_act_forward in place, which needs C dense.
 void epilogue_pass(Runtime& rt, const GemmArgs& g, const GemmEpilogue& e) {
   using detail::u32;

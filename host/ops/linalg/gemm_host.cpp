@@ -110,7 +110,7 @@ struct HostGemmCall {
 // two trainings; with 8 MiB blocks 1.13x faster (docs/performance.md).
 constexpr size_t kEpilogueBlockFloats = size_t{1} << 21;
 
-// C rows [r0, r0 + rows) = act(C + bias): activation.cl's bias_act_forward, element by element
+// C rows [r0, r0 + rows) = act(C + bias): bias_act.cl's bias_act_forward, element by element
 // (one rounded add, then ReLU as x > 0 ? x : 0, which gives fmax's result for every x).
 void bias_act_rows(float* c, int ldc, int r0, int rows, int n, const float* bias, bool relu) {
   for (int r = r0; r < r0 + rows; ++r) {

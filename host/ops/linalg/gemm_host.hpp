@@ -17,7 +17,7 @@ void host_gemm(Runtime& rt, const GemmArgs& g, const GemmEpilogue& epi = {});
 // (8 MiB), each product followed at once by its bias and activation while the block is in cache
 // (a separate pass would read and write all of C from memory again). Only where op(A) keeps
 // A's rows (no trans_a) and only the identity and ReLU, whose float results the host computes
-// exactly as kernels/activation.cl does; the sigmoid and softplus keep the device's pass.
+// exactly as kernels/bias_act.cl does; the sigmoid and softplus keep the device's pass.
 bool host_gemm_fuses(const GemmArgs& g, Activation act);
 
 }  // namespace nova

@@ -51,7 +51,7 @@ Tensor sparsity_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {});
 
 // Distortion loss (mip-NeRF 360), each NeRF with its own transmittance: the mean over NeRFs n
 // and rays r of mask_n(r) sum_{i,j} w_i w_j |u_i - u_j|, w = T alpha its sample weights and u
-// the sample depths z scaled to [0, 1] along the ray (kernels/distortion.cl). 0 for one
+// the sample depths z scaled to [0, 1] along the ray (kernels/distortion_loss.cl). 0 for one
 // opaque sample, larger the more the weight is spread: it removes low-density haze and the
 // streaks an object seen from one camera per time leaves along that camera's rays. raw
 // [N, R*S, C] or [R*S, C], delta as render_composite, z [R, S], masks [N, R] (or Tensor{}:
@@ -60,7 +60,7 @@ Tensor sparsity_loss(Tensor raw, Tensor delta, Tensor masks, Tensor noise = {});
 Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Tensor noise = {},
                        size_t first_nerf = 0);
 
-// Free-space loss (kernels/free_space.cl): the weight each NeRF n >= first_nerf puts more than
+// Free-space loss (kernels/free_space_loss.cl): the weight each NeRF n >= first_nerf puts more than
 // `margin` in front of the depth the disparity gives, on the rays of its mask, weighted by the
 // distance: mean over NeRFs n and rays r of valid_r mask_n(r) sum_i w_i max(0, z*_r - margin
 // - z_i), w = T alpha its own sample weights. The target z*_r = a + b target_r, (a, b) the

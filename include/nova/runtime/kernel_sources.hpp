@@ -6,7 +6,7 @@
 namespace nova {
 
 struct KernelSource {
-  std::string_view family;  // file name without .cl, e.g. "activation"
+  std::string_view family;  // file name without .cl, e.g. "bias_act"
   std::string_view source;
 };
 

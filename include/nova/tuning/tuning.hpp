@@ -53,7 +53,7 @@ struct RenderParams {
   std::string to_defines() const;
 };
 
-// kernels/hashgrid.cl: input dimensions, features per level, the extended box.
+// kernels/hash_encoding.cl: input dimensions, features per level, the extended box.
 struct HashGridParams {
   size_t dims = 3, features = 2;
   bool extend = false;
@@ -71,7 +71,7 @@ HashBackward hash_backward_choice(const DeviceInfo& device);
 
 // How bias_act's backward sums the bias gradient and writes dh; all three give the same bits.
 // Strided: one work-item per column and part (GPUs). Rows: one work-item per eight columns
-// walking the rows in order (activation.cl's bias_grad_rows). Host: the same walk as a host
+// walking the rows in order (bias_act.cl's bias_grad_rows). Host: the same walk as a host
 // function on the device's queue (bias_grad_host.cpp; CPU devices with native kernels, for the
 // identity and ReLU; other activations take Rows), reading whole rows in order on all cores.
 enum class BiasGradWalk { Strided, Rows, Host };
@@ -91,7 +91,7 @@ enum class ArenaLayout { SubBuffers, Separate };
 // SubBuffers. Error (exit 2) for another value.
 ArenaLayout arena_layout(const DeviceInfo& device);
 
-// kernels/activation.cl's ACT, and the GEMM epilogue's GEMM_BIAS_ACT (kernels/gemm.cl): the
+// kernels/bias_act.cl's ACT, and the GEMM epilogue's GEMM_BIAS_ACT (kernels/gemm.cl): the
 // activation's number (ops.hpp's Activation).
 struct ActivationParams {
   int act = 0;

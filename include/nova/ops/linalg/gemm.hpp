@@ -20,7 +20,7 @@
 // A forward layer may ask for an epilogue, C = act(alpha op(A) op(B) + beta C + bias): nova's
 // own kernels apply it as they store C (after a split reduction's sum, never to a partial), so
 // the output is written once; CLBlast and the host BLAS cannot, and get a second pass over C
-// (bias_act_forward of kernels/activation.cl, in place).
+// (bias_act_forward of kernels/bias_act.cl, in place).
 #include <cstddef>
 #include <string>
 #include <vector>

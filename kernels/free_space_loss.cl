@@ -12,7 +12,7 @@
 // image, so only this term holds it at the disparity's depth (seen from elsewhere it shifts).
 // Unlike the depth loss on the expected depth, this sees a haze in front of a surface even
 // where the expected depth is right, and unlike the distortion loss it sees a compact layer
-// at the wrong depth. Layout as kernels/distortion.cl (raw [N, R*S, C], sigma in channel 3).
+// at the wrong depth. Layout as kernels/distortion_loss.cl (raw [N, R*S, C], sigma in channel 3).
 
 // Keeps the fit's slope finite where t is constant over its rays; the value of the depth
 // loss's DEPTH_EPS (kernels/depth_loss.cl), so both regularise alike.
