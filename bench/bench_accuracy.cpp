@@ -17,7 +17,7 @@
 #include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/data/synth.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/charts.hpp"
 #include "nova/train/progress_line.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/runtime/runtime.hpp"

@@ -37,7 +37,7 @@
 #include "nova/io/image_io.hpp"
 #include "nova/data/scene_io.hpp"
 #include "nova/data/synth.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/charts.hpp"
 #include "nova/model/mlp.hpp"
 #include "nova/ops/linalg/dense.hpp"
 #include "nova/loss/terms.hpp"

@@ -20,7 +20,6 @@
 #include "nova/metrics/image_metrics.hpp"
 #include "nova/data/scene_io.hpp"
 #include "nova/data/synth.hpp"
-#include "nova/io/visualize.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/runtime/runtime.hpp"
 #include "nova/train/trainer.hpp"

@@ -9,7 +9,7 @@
 
 #include "nova/runtime/error.hpp"
 #include "nova/ops/linalg/gemm.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/charts.hpp"
 #include "nova/train/train_config.hpp"
 
 namespace nova::tradeoff {

@@ -9,7 +9,7 @@
 #include "harness.hpp"
 #include "nova/metrics/image_metrics.hpp"
 #include "nova/data/scene_io.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/pictures.hpp"
 #include "nova/sampling/rigid_motion.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/train/trainer.hpp"

@@ -20,7 +20,6 @@
 #include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/metrics/image_metrics.hpp"
-#include "nova/io/visualize.hpp"
 #include "nova/runtime/runtime.hpp"
 
 namespace nova::cli {

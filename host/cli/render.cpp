@@ -20,7 +20,8 @@
 #include "nova/io/compose_spec_text.hpp"
 #include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/pictures.hpp"
+#include "nova/io/video.hpp"
 #include "nova/runtime/runtime.hpp"
 
 namespace nova::cli {

@@ -7,7 +7,7 @@
 
 #include "nova/metrics/image_metrics.hpp"
 #include "nova/data/scene_io.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/pictures.hpp"
 
 namespace nova {
 

@@ -14,7 +14,8 @@
 #include "nova/train/disparity_fit.hpp"
 #include "nova/runtime/error.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/charts.hpp"
+#include "nova/io/pictures.hpp"
 
 namespace nova {
 namespace {
