@@ -3,6 +3,7 @@
 #include "nova/loss/objective.hpp"
 #include "nova/loss/terms.hpp"
 #include "nova/runtime/error.hpp"
+#include "nova/sampling/rigid_motion.hpp"
 
 namespace nova {
 
@@ -76,6 +77,71 @@ RenderOptions pretrain_render_options(const LossConventions& c) {
 
 Tensor pretrain_rgb_loss(Tensor rgb, Tensor target, Tensor background) {
   return background.valid() ? masked_mse(rgb, target, background) : mse(rgb, target);
+}
+
+void Objective::add(const std::string& name, Tensor term, float weight) {
+  terms.emplace_back(name, term);
+  total = weighted_sum({total, term}, {1.0f, weight});
+}
+
+Tensor Objective::term(const std::string& name) const {
+  for (const auto& [n, t] : terms)
+    if (n == name) return t;
+  return {};
+}
+
+void DisparityTargets::make() {
+  if (target.valid()) return;
+  const Shape shape{rays};
+  target = graph->input("target_depth", shape);
+  valid = graph->input("depth_valid", shape);
+}
+
+namespace {
+
+// w_depth * depth_loss(depth, -disparity); with `ranks`, over the whole batch (its statistics
+// summed over ranks).
+void add_depth_prior(Objective& o, const RenderedRays& r, const PriorWeights& p, DisparityTargets* disparity,
+                     GradientReducer* ranks) {
+  if (p.depth <= 0.0f || !disparity) return;
+  disparity->make();
+  o.add("depth", depth_loss(r.out.depth, disparity->target, disparity->valid, ranks), p.depth);
+}
+
+}  // namespace
+
+Objective pretrain_objective(const RenderedRays& r, Tensor target_rgb, const PriorWeights& priors,
+                             DisparityTargets* disparity, GradientReducer* ranks) {
+  const Tensor rgb = pretrain_rgb_loss(r.out.rgb, target_rgb);
+  Objective o{rgb, {{"static_rgb", rgb}}};
+  add_depth_prior(o, r, priors, disparity, ranks);
+  return o;
+}
+
+Objective joint_objective(const RenderedRays& r, const NovelViewTargets& targets, const NovelViewLossWeights& weights,
+                          const RenderOptions& options, const LossConventions& conventions,
+                          const PriorWeights& p, DisparityTargets* disparity, Tensor motion, int frames,
+                          GradientReducer* ranks) {
+  const NovelViewLoss l = novel_view_loss(r.out, r.raw, r.delta, r.noise, targets, weights, options, conventions, ranks);
+  Objective o{l.total, {}};
+  for (auto [name, t] : {std::pair<const char*, Tensor>{"full_rgb", l.full_rgb}, {"nerf_rgb", l.nerf_rgb},
+                         {"mask", l.mask}, {"blending", l.blending}, {"alpha", l.alpha},
+                         {"sparsity", l.sparsity}, {"order", l.order}})
+    if (t.valid()) o.terms.emplace_back(name, t);
+  add_depth_prior(o, r, p, disparity, ranks);
+  if (p.distortion > 0.0f)
+    o.add("distortion", distortion_loss(r.raw, r.delta, r.z, targets.masks, r.noise, 1), p.distortion);
+  // With `ranks` the disparity fit is the whole batch's.
+  if (p.free_space > 0.0f && disparity) {
+    disparity->make();
+    o.add("free_space",
+          free_space_loss(r.raw, r.delta, r.z, r.out.depth, disparity->target, disparity->valid, targets.masks,
+                          r.noise, p.free_space_margin, 1, p.free_space_behind, ranks),
+          p.free_space);
+  }
+  if (motion.valid() && p.motion_smooth > 0.0f)
+    o.add("motion_smooth", motion_smoothness(motion, frames), p.motion_smooth);
+  return o;
 }
 
 }  // namespace nova

@@ -46,8 +46,6 @@ struct StepGraph {
 // Whether the scene's disparity can supervise depth: every frame has a map, and rays are NDC
 // (where the rendered depth is affine in disparity; metric depth is not).
 bool disparity_usable(const RayGeometry& g);
-// Whether the graphs get the depth loss: a weight and usable disparity.
-bool depth_term_active(const TrainConfig& c, const RayGeometry& g);
 
 // The static NeRF alone on `rays` rays (background pixels): mse of its colour.
 // With a slice (data-parallel training, distributed.hpp) the graph takes c.rays rays, the
