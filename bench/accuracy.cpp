@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::accuracy {
 

@@ -14,15 +14,15 @@
 
 #include "accuracy.hpp"
 #include "bench.hpp"
-#include "nova/io/evaluation.hpp"
+#include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/synth.hpp"
-#include "nova/io/visualize.hpp"
-#include "nova/progress_line.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/runtime.hpp"
-#include "nova/trainer.hpp"
-#include "nova/view_renderer.hpp"
+#include "nova/data/synth.hpp"
+#include "nova/io/charts.hpp"
+#include "nova/train/progress_line.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/runtime/runtime.hpp"
+#include "nova/train/trainer.hpp"
+#include "nova/model/view_renderer.hpp"
 #include "options.hpp"
 
 namespace nova::bench {
@@ -266,16 +266,8 @@ Image8 results_plot(const std::vector<SceneResult>& results, const std::string& 
 }  // namespace
 
 int accuracy(const Args& raw_args) {
-  // --set may be repeated: take those out before the single-valued options.
-  std::vector<std::string> args, sets;
-  for (size_t i = 0; i < raw_args.size(); ++i) {
-    if (raw_args[i] == "--set") {
-      if (i + 1 >= raw_args.size()) throw Error("--set needs a value (KEY=VALUE, a nova train option)");
-      sets.push_back(raw_args[++i]);
-    } else {
-      args.push_back(raw_args[i]);
-    }
-  }
+  std::vector<std::string> args = raw_args;
+  const std::vector<std::string> sets = take_repeated(args, "set", "KEY=VALUE, a nova train option");
   const Options o(args, {{"scenes", "dev"}, {"out", "accuracy"}, {"preset", "quick"}, {"config", ""}, {"data", ""},
                          {"device", ""}, {"reuse", "off"}, {"dry-run", "off"}});
   if (o.help()) {

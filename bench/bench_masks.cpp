@@ -1,4 +1,4 @@
-// `nova-bench masks`: nova masks (include/nova/io/motion_masks.hpp) against known masks: the
+// `nova-bench masks`: nova masks (include/nova/masks/motion_masks.hpp) against known masks: the
 // synthetic family's exact object masks (seeds) and a scene's own masks folder (--truth).
 // Per scene the IoU of the objects' union per frame (mean and worst frame), the object count
 // and the seconds; the settings are the MotionMaskOptions fields, so that dev seeds can choose them.
@@ -11,11 +11,11 @@
 #include "bench.hpp"
 #include "options.hpp"
 #include "data/fs_util.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/motion_masks.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/masks/motion_masks.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/data/synth.hpp"
 
 namespace nova::bench {
 namespace {

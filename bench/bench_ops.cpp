@@ -10,9 +10,9 @@
 #include <sstream>
 
 #include "bench.hpp"
-#include "nova/error.hpp"
-#include "nova/executor.hpp"
-#include "nova/runtime.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/runtime/runtime.hpp"
 #include "op_table.hpp"
 #include "options.hpp"
 

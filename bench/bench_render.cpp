@@ -9,7 +9,7 @@
 
 #include "bench.hpp"
 #include "composite_problem.hpp"
-#include "nova/runtime.hpp"
+#include "nova/runtime/runtime.hpp"
 #include "options.hpp"
 
 namespace nova::bench {

@@ -17,11 +17,11 @@
 #include <sstream>
 
 #include "bench.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/runtime.hpp"
-#include "nova/train_config.hpp"
-#include "nova/trainer.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/runtime/runtime.hpp"
+#include "nova/train/train_config.hpp"
+#include "nova/train/trainer.hpp"
 #include "options.hpp"
 #include "torch_peer.hpp"
 

@@ -15,16 +15,15 @@
 #include <sstream>
 
 #include "bench.hpp"
-#include "nova/gemm.hpp"
+#include "nova/ops/linalg/gemm.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/image_metrics.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/io/synth.hpp"
-#include "nova/io/visualize.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/runtime.hpp"
-#include "nova/trainer.hpp"
-#include "nova/view_renderer.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/data/synth.hpp"
+#include "nova/eval/evaluation.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/runtime/runtime.hpp"
+#include "nova/train/trainer.hpp"
+#include "nova/model/view_renderer.hpp"
 #include "options.hpp"
 #include "tradeoff.hpp"
 
@@ -111,7 +110,7 @@ void write_atomically(const std::string& path, const std::string& text) {
 
 // The ground truth evaluated after every segment: camera 0 at `count` times spread over the
 // video (the paper's protocol on a subset), else held-out views.
-std::vector<const GroundTruthView*> eval_views(const Scene& scene, int count, std::string* kind) {
+std::vector<GroundTruthView> eval_views(const Scene& scene, int count, std::string* kind) {
   std::vector<const GroundTruthView*> all;
   for (const std::string k : {"cam0", "heldout"}) {
     for (const auto& v : scene.gt_views)
@@ -125,34 +124,25 @@ std::vector<const GroundTruthView*> eval_views(const Scene& scene, int count, st
     throw Error("scene '" + scene.source + "' has no ground-truth views (camera 0 at every time, or held-out "
                 "cameras): the tradeoff needs them (nova synth scenes have them)");
   std::stable_sort(all.begin(), all.end(), [](auto* a, auto* b) { return a->time_index < b->time_index; });
-  std::vector<const GroundTruthView*> out;
+  std::vector<GroundTruthView> out;
   for (int i : spread_indices(static_cast<int>(all.size()), count <= 0 ? static_cast<int>(all.size()) : count))
-    out.push_back(all[static_cast<size_t>(i)]);
+    out.push_back(*all[static_cast<size_t>(i)]);
   return out;
 }
 
+// Mean PSNR and SSIM of the views as `nova eval` scores them (learnt blending, its default for
+// the scene's own views).
 std::pair<double, double> evaluate(Runtime& rt, Trainer& trainer, const TrainConfig& config, const Scene& scene,
-                                   const std::vector<const GroundTruthView*>& views) {
+                                   const std::vector<GroundTruthView>& views) {
   const Checkpoint ck = trainer.checkpoint();
   ViewRenderer renderer(rt, config, ray_geometry(scene), ck);
-  double p = 0, s = 0;
-  for (const GroundTruthView* v : views) {
-    ViewRequest req;
-    req.camera = v->camera;
-    req.hard_blend = false;  // nova eval's default for the scene's own views
-    req.instances = scene_instances(scene.num_objects, v->time);
-    const ViewImage img = renderer.render(req);
-    const Image8 out = float_rgb_to_image(img.rgb, img.width, img.height);
-    p += psnr(out, v->rgb);
-    s += ssim(out, v->rgb);
-  }
-  return {p / views.size(), s / views.size()};
+  return mean_scores(score_views(renderer, scene.num_objects, views, /*hard_blend=*/false));
 }
 
 double since(clock_type::time_point t) { return std::chrono::duration<double>(clock_type::now() - t).count(); }
 
 RunResult run_setting(const Planned& pl, const Scene& scene, const DeviceInfo& device, const Budget& budget,
-                      int segments, const std::vector<const GroundTruthView*>& views, const std::string& run_dir,
+                      int segments, const std::vector<GroundTruthView>& views, const std::string& run_dir,
                       bool warmup, bool keep_checkpoint) {
   RunResult r;
   const TrainConfig& c = pl.config;
@@ -244,19 +234,195 @@ RunResult run_setting(const Planned& pl, const Scene& scene, const DeviceInfo& d
 
 std::string speedup_text(const std::optional<double>& s) { return s ? fmt(*s, 2) + "x" : "n/a"; }
 
+// Settings: --setting, else --settings FILE, else the defaults.
+std::vector<Setting> read_settings(const std::vector<std::string>& specs, const std::string& file) {
+  std::vector<Setting> settings;
+  if (!specs.empty()) {
+    if (file != "default") throw Error("give --setting or --settings FILE, not both");
+    for (const std::string& s : specs) settings.push_back(parse_setting(s));
+  } else if (file != "default") {
+    std::ifstream in(file);
+    if (!in) throw Error("--settings: file '" + file + "' cannot be read");
+    std::stringstream text;
+    text << in.rdbuf();
+    settings = parse_settings_text(text.str(), file);
+  } else {
+    settings = default_settings();
+  }
+  check_unique_names(settings);
+  return settings;
+}
+
+// Every setting resolved to a configuration before anything is written. A setting with an
+// option this build's nova train does not know is skipped with a warning (named in *skipped);
+// one equal to an earlier setting is marked to share its training.
+std::vector<Planned> plan_settings(const std::vector<Setting>& settings, const Setting& base,
+                                   const std::string& preset_arg, const Budget& budget,
+                                   std::vector<std::string>* skipped) {
+  const std::string default_gemm = env_gemm();
+  std::vector<Planned> plan;
+  for (const Setting& s : settings) {
+    if (const auto unknown = unknown_keys(s); !unknown.empty()) {
+      std::string keys;
+      for (const auto& k : unknown) keys += (keys.empty() ? "'" : ", '") + k + "'";
+      std::cerr << "nova-bench tradeoff: warning: skipping setting '" << s.name << "': " << keys
+                << (unknown.size() > 1 ? " are not options" : " is not an option")
+                << " of this build's nova train (nova train --help)\n";
+      skipped->push_back(s.name);
+      continue;
+    }
+    Planned p{s, {}, {}, {}};
+    std::string preset = preset_arg;
+    for (const auto* list : {&base.overrides, &s.overrides})
+      for (const auto& [k, v] : *list)
+        if (k == "preset") preset = v;
+    try {
+      p.config = preset_config(preset);
+      p.config.checkpoint_every = 1000000000;  // only at segment ends (outside the clock)
+      for (const auto* list : {&base.overrides, &s.overrides})
+        for (const auto& [k, v] : *list)
+          if (k != "preset") set_config_value(p.config, k, v);
+      if (budget.seconds <= 0) {
+        p.config.pretrain_steps = static_cast<int>(std::lround(p.config.pretrain_steps * budget.scale));
+        p.config.steps = static_cast<int>(std::lround(p.config.steps * budget.scale));
+        p.config.lr_decay_steps = std::max(1, static_cast<int>(std::lround(p.config.lr_decay_steps * budget.scale)));
+      }
+      if (p.config.pretrain_steps + p.config.steps <= 0) throw Error("it trains no steps");
+      validate(p.config);
+    } catch (const Error& e) {
+      throw Error("setting '" + s.name + "': " + e.what());
+    }
+    p.gemm = !s.gemm.empty() ? s.gemm : !base.gemm.empty() ? base.gemm : default_gemm;
+    const std::string key = format_config(p.config) + "gemm = " + p.gemm;
+    for (const Planned& q : plan)
+      if (q.same_as.empty() && format_config(q.config) + "gemm = " + q.gemm == key) p.same_as = q.setting.name;
+    plan.push_back(std::move(p));
+  }
+  if (plan.empty()) throw Error("no setting left to train (every one was skipped)");
+  return plan;
+}
+
+using Scenes = std::map<std::pair<int, int>, Scene>;  // (factor, holdout) -> scene
+
+// The scene folder once per factor and hold-out of the plan; each must have ground truth.
+Scenes load_scenes(const std::string& dir, const std::vector<Planned>& plan, int eval_count) {
+  Scenes scenes;
+  for (const Planned& p : plan) {
+    const auto k = std::make_pair(p.config.factor, p.config.holdout);
+    if (scenes.count(k)) continue;
+    LoadOptions lo;
+    lo.factor = p.config.factor;
+    lo.load_gt = true;
+    Scene sc = load_scene(dir, lo);
+    if (p.config.holdout > 0) hold_out_frames(sc, p.config.holdout);
+    std::string kind;
+    eval_views(sc, eval_count, &kind);
+    scenes.emplace(k, std::move(sc));
+  }
+  return scenes;
+}
+
+// One line per setting: its overrides and what it trains (or the earlier setting it shares).
+void print_plan(const std::vector<Planned>& plan, const std::vector<std::string>& skipped, const Budget& budget) {
+  int distinct = 0;
+  long distinct_steps = 0;
+  for (const Planned& p : plan) {
+    std::cout << "  " << std::left << std::setw(14) << p.setting.name << std::setw(36) << overrides_text(p.setting);
+    if (!p.same_as.empty()) {
+      std::cout << " same configuration as " << p.same_as << ": not trained again\n";
+      continue;
+    }
+    ++distinct;
+    distinct_steps += long(p.config.pretrain_steps) + p.config.steps;
+    std::cout << " " << p.config.pretrain_steps << " + " << p.config.steps << " steps, " << p.config.rays
+              << " rays x " << p.config.samples << " samples, width " << p.config.field.width << ", gemm " << p.gemm
+              << "\n";
+  }
+  for (const std::string& s : skipped) std::cout << "  " << std::left << std::setw(14) << s << "skipped (see the warning)\n";
+  std::cout << "  baseline: " << plan[0].setting.name << "; " << distinct << " trainings"
+            << (budget.seconds > 0 ? " of up to " + fmt(budget.seconds, 0) + " s each"
+                                   : ", " + std::to_string(distinct_steps) + " steps in all")
+            << "\n";
+}
+
+// The equal-PSNR level: --target-psnr, else the baseline's final PSNR - 0.5 dB (NaN before
+// the baseline has a point).
+double equal_psnr_level(const std::vector<Planned>& plan, const std::vector<Curve>& curves,
+                        const std::optional<double>& target) {
+  if (target) return *target;
+  for (const Curve& c : curves)
+    if (c.setting == plan[0].setting.name && !c.points.empty()) return c.points.back().psnr - 0.5;
+  return NAN;
+}
+
+// summary.txt: the plan's head, then per setting its last point, the time it reached `level`
+// and its speedup over the baseline there, then what was left untimed or skipped.
+std::string summary_text(const std::string& head, const std::vector<Planned>& plan, const std::vector<Curve>& curves,
+                         const std::map<std::string, RunResult>& results, double level, bool from_target,
+                         const std::vector<std::string>& skipped) {
+  const Planned& b = plan[0];
+  const Curve* bc = nullptr;
+  for (const Curve& c : curves)
+    if (c.setting == b.setting.name) bc = &c;
+  std::ostringstream s;
+  s << head << "\n"
+    << std::left << std::setw(15) << "setting" << std::setw(15) << "run" << std::right << std::setw(7) << "steps"
+    << std::setw(10) << "train s" << std::setw(12) << "rays/s jnt" << std::setw(8) << "PSNR" << std::setw(8)
+    << "SSIM" << std::setw(10) << "t(L) s" << "  speedup at equal PSNR\n";
+  for (const Planned& p : plan) {
+    const std::string run = p.same_as.empty() ? p.setting.name : p.same_as;
+    s << std::left << std::setw(15) << p.setting.name << std::setw(15) << (run == p.setting.name ? "" : "= " + run);
+    const Curve* c = nullptr;
+    for (const Curve& x : curves)
+      if (x.setting == p.setting.name) c = &x;
+    const auto rit = results.find(run);
+    if (!c || c->points.empty()) {
+      s << std::right << "  " << (rit != results.end() && !rit->second.error.empty() ? "failed: " + rit->second.error : "not run yet") << "\n";
+      continue;
+    }
+    const Point& last = c->points.back();
+    const auto t = std::isfinite(level) ? time_to_reach(c->points, level) : std::nullopt;
+    s << std::right << std::setw(7) << last.steps << std::setw(10) << fmt(last.seconds, 1) << std::setw(12)
+      << fmt(rit != results.end() ? rit->second.joint_rays_per_s : 0, 0) << std::setw(8) << fmt(last.psnr, 2)
+      << std::setw(8) << fmt(last.ssim, 4) << std::setw(10) << (t ? fmt(*t, 1) : "n/a") << "  "
+      << (bc && std::isfinite(level) ? speedup_text(speedup_at(*bc, *c, level)) : "n/a")
+      << (p.setting.name == b.setting.name ? " (baseline)" : "") << "\n";
+  }
+  if (std::isfinite(level))
+    s << "equal-PSNR level L = " << fmt(level, 2) << " dB ("
+      << (from_target ? "--target-psnr" : "baseline " + b.setting.name + "'s final PSNR - 0.5 dB")
+      << "); speedup = t_" << b.setting.name << "(L) / t_setting(L), n/a when one never reaches L\n";
+  double warm = 0, ev = 0;
+  for (const auto& [name, r] : results) warm += r.warmup_s, ev += r.eval_s;
+  s << "untimed: warm-up " << fmt(warm, 0) << " s, evaluation " << fmt(ev, 0) << " s\n";
+  for (const std::string& k : skipped) s << "skipped: " << k << " (an option this build's nova train does not know)\n";
+  return s.str();
+}
+
+// The plot at `path`: one series per training, named by every setting that shares it.
+void write_plot(const std::string& path, const std::vector<Planned>& plan, const std::map<std::string, RunResult>& results,
+                const std::string& title, double level) {
+  std::vector<Series> series;
+  for (const Planned& p : plan) {
+    if (!p.same_as.empty()) continue;
+    const auto it = results.find(p.setting.name);
+    if (it == results.end() || it->second.points.empty()) continue;
+    Series se;
+    se.label = p.setting.name;
+    for (const Planned& q : plan)
+      if (q.same_as == p.setting.name) se.label += " = " + q.setting.name;
+    for (const Point& pt : it->second.points) se.xy.emplace_back(pt.seconds, pt.psnr);
+    series.push_back(std::move(se));
+  }
+  write_png(path + ".tmp.png", plot(series, title, level));
+  fs::rename(path + ".tmp.png", path);
+}
+
 }  // namespace
 
 int tradeoff(const Args& raw_args) {
-  // --setting may be repeated: take those out before the single-valued options.
-  std::vector<std::string> args, specs;
-  for (size_t i = 0; i < raw_args.size(); ++i) {
-    if (raw_args[i] == "--setting") {
-      if (i + 1 >= raw_args.size()) throw Error("--setting needs a value (NAME:KEY=VALUE,...)");
-      specs.push_back(raw_args[++i]);
-    } else {
-      args.push_back(raw_args[i]);
-    }
-  }
+  std::vector<std::string> args = raw_args;
+  const std::vector<std::string> specs = take_repeated(args, "setting", "NAME:KEY=VALUE,...");
   const Options o(args, {{"scene", ""}, {"out", "tradeoff"}, {"budget", "1"}, {"segments", "6"},
                          {"settings", "default"}, {"base", ""}, {"preset", "quick"}, {"eval-views", "4"},
                          {"target-psnr", "auto"}, {"device", ""}, {"keep-checkpoints", "off"},
@@ -286,88 +452,17 @@ int tradeoff(const Args& raw_args) {
     return d;
   }();
 
-  // Settings: --setting, else --settings FILE, else the defaults.
-  std::vector<Setting> settings;
-  if (!specs.empty()) {
-    if (o.str("settings") != "default") throw Error("give --setting or --settings FILE, not both");
-    for (const std::string& s : specs) settings.push_back(parse_setting(s));
-  } else if (o.str("settings") != "default") {
-    const std::string path = o.str("settings");
-    std::ifstream in(path);
-    if (!in) throw Error("--settings: file '" + path + "' cannot be read");
-    std::stringstream text;
-    text << in.rdbuf();
-    settings = parse_settings_text(text.str(), path);
-  } else {
-    settings = default_settings();
-  }
-  check_unique_names(settings);
+  const std::vector<Setting> settings = read_settings(specs, o.str("settings"));
   const Setting base = parse_setting("base:" + o.str("base"), "--base");
   for (const std::string& k : unknown_keys(base))
     throw Error("--base: '" + k + "' is not an option of nova train (nova train --help)");
-  const std::string default_gemm = env_gemm();
-
-  // Resolve every setting to a configuration before anything is written.
-  std::vector<Planned> plan;
   std::vector<std::string> skipped;
-  for (const Setting& s : settings) {
-    if (const auto unknown = unknown_keys(s); !unknown.empty()) {
-      std::string keys;
-      for (const auto& k : unknown) keys += (keys.empty() ? "'" : ", '") + k + "'";
-      std::cerr << "nova-bench tradeoff: warning: skipping setting '" << s.name << "': " << keys
-                << (unknown.size() > 1 ? " are not options" : " is not an option")
-                << " of this build's nova train (nova train --help)\n";
-      skipped.push_back(s.name);
-      continue;
-    }
-    Planned p{s, {}, {}, {}};
-    std::string preset = o.str("preset");
-    for (const auto* list : {&base.overrides, &s.overrides})
-      for (const auto& [k, v] : *list)
-        if (k == "preset") preset = v;
-    try {
-      p.config = preset_config(preset);
-      p.config.checkpoint_every = 1000000000;  // only at segment ends (outside the clock)
-      for (const auto* list : {&base.overrides, &s.overrides})
-        for (const auto& [k, v] : *list)
-          if (k != "preset") set_config_value(p.config, k, v);
-      if (budget.seconds <= 0) {
-        p.config.pretrain_steps = static_cast<int>(std::lround(p.config.pretrain_steps * budget.scale));
-        p.config.steps = static_cast<int>(std::lround(p.config.steps * budget.scale));
-        p.config.lr_decay_steps = std::max(1, static_cast<int>(std::lround(p.config.lr_decay_steps * budget.scale)));
-      }
-      if (p.config.pretrain_steps + p.config.steps <= 0) throw Error("it trains no steps");
-      validate(p.config);
-    } catch (const Error& e) {
-      throw Error("setting '" + s.name + "': " + e.what());
-    }
-    p.gemm = !s.gemm.empty() ? s.gemm : !base.gemm.empty() ? base.gemm : default_gemm;
-    const std::string key = format_config(p.config) + "gemm = " + p.gemm;
-    for (const Planned& q : plan)
-      if (q.same_as.empty() && format_config(q.config) + "gemm = " + q.gemm == key) p.same_as = q.setting.name;
-    plan.push_back(std::move(p));
-  }
-  if (plan.empty()) throw Error("no setting left to train (every one was skipped)");
+  const std::vector<Planned> plan = plan_settings(settings, base, o.str("preset"), budget, &skipped);
 
   // Scene: the given one must load (with every setting's factor and hold-out) and have
   // ground truth; the default one is generated later.
   const std::string scene_arg = o.str("scene");
-  std::map<std::pair<int, int>, Scene> scenes;  // (factor, holdout) -> scene
-  const auto load = [&](const std::string& dir) {
-    scenes.clear();
-    for (const Planned& p : plan) {
-      const auto k = std::make_pair(p.config.factor, p.config.holdout);
-      if (scenes.count(k)) continue;
-      LoadOptions lo;
-      lo.factor = p.config.factor;
-      lo.load_gt = true;
-      Scene sc = load_scene(dir, lo);
-      if (p.config.holdout > 0) hold_out_frames(sc, p.config.holdout);
-      std::string kind;
-      eval_views(sc, static_cast<int>(eval_count), &kind);
-      scenes.emplace(k, std::move(sc));
-    }
-  };
+  Scenes scenes;
   if (!scene_arg.empty()) {
     if (!fs::is_directory(scene_arg)) throw Error("--scene: folder '" + scene_arg + "' does not exist");
     std::error_code ec;
@@ -375,7 +470,7 @@ int tradeoff(const Args& raw_args) {
     const auto rel = so.lexically_relative(oo);
     if (!rel.empty() && *rel.begin() != "..")
       throw Error("--scene '" + scene_arg + "' lies inside --out '" + out + "'");
-    load(scene_arg);
+    scenes = load_scenes(scene_arg, plan, static_cast<int>(eval_count));
   }
   const DeviceInfo device = select_device(o.str("device"));
   const bool out_exists = fs::exists(out);
@@ -401,25 +496,7 @@ int tradeoff(const Args& raw_args) {
          << "\n";
   }
   std::cout << head.str();
-  int distinct = 0;
-  long distinct_steps = 0;
-  for (const Planned& p : plan) {
-    std::cout << "  " << std::left << std::setw(14) << p.setting.name << std::setw(36) << overrides_text(p.setting);
-    if (!p.same_as.empty()) {
-      std::cout << " same configuration as " << p.same_as << ": not trained again\n";
-      continue;
-    }
-    ++distinct;
-    distinct_steps += long(p.config.pretrain_steps) + p.config.steps;
-    std::cout << " " << p.config.pretrain_steps << " + " << p.config.steps << " steps, " << p.config.rays
-              << " rays x " << p.config.samples << " samples, width " << p.config.field.width << ", gemm " << p.gemm
-              << "\n";
-  }
-  for (const std::string& s : skipped) std::cout << "  " << std::left << std::setw(14) << s << "skipped (see the warning)\n";
-  std::cout << "  baseline: " << plan[0].setting.name << "; " << distinct << " trainings"
-            << (budget.seconds > 0 ? " of up to " + fmt(budget.seconds, 0) + " s each"
-                                   : ", " + std::to_string(distinct_steps) + " steps in all")
-            << "\n";
+  print_plan(plan, skipped, budget);
   if (o.flag("dry-run")) {
     if (out_exists && !o.flag("force")) std::cout << "note: '" << out << "' exists: the run needs --force\n";
     return 0;
@@ -436,69 +513,18 @@ int tradeoff(const Args& raw_args) {
       scene_dir = out + "/scene";
       std::cerr << "generating the default synthetic scene into " << scene_dir << "\n";
       write_synthetic_scene(scene_dir, "default", 0);
-      load(scene_dir);
+      scenes = load_scenes(scene_dir, plan, static_cast<int>(eval_count));
     }
     std::vector<Curve> curves;
     std::map<std::string, RunResult> results;
     std::string summary;
     const auto report = [&]() {
-      // The equal-PSNR level: --target-psnr, else the baseline's final PSNR - 0.5 dB.
-      const Planned& b = plan[0];
-      const Curve* bc = nullptr;
-      for (const Curve& c : curves)
-        if (c.setting == b.setting.name) bc = &c;
-      double level = NAN;
-      if (target) level = *target;
-      else if (bc && !bc->points.empty()) level = bc->points.back().psnr - 0.5;
-      std::ostringstream s;
-      s << head.str() << "\n"
-        << std::left << std::setw(15) << "setting" << std::setw(15) << "run" << std::right << std::setw(7) << "steps"
-        << std::setw(10) << "train s" << std::setw(12) << "rays/s jnt" << std::setw(8) << "PSNR" << std::setw(8)
-        << "SSIM" << std::setw(10) << "t(L) s" << "  speedup at equal PSNR\n";
-      for (const Planned& p : plan) {
-        const std::string run = p.same_as.empty() ? p.setting.name : p.same_as;
-        s << std::left << std::setw(15) << p.setting.name << std::setw(15) << (run == p.setting.name ? "" : "= " + run);
-        const Curve* c = nullptr;
-        for (const Curve& x : curves)
-          if (x.setting == p.setting.name) c = &x;
-        const auto rit = results.find(run);
-        if (!c || c->points.empty()) {
-          s << std::right << "  " << (rit != results.end() && !rit->second.error.empty() ? "failed: " + rit->second.error : "not run yet") << "\n";
-          continue;
-        }
-        const Point& last = c->points.back();
-        const auto t = std::isfinite(level) ? time_to_reach(c->points, level) : std::nullopt;
-        s << std::right << std::setw(7) << last.steps << std::setw(10) << fmt(last.seconds, 1) << std::setw(12)
-          << fmt(rit != results.end() ? rit->second.joint_rays_per_s : 0, 0) << std::setw(8) << fmt(last.psnr, 2)
-          << std::setw(8) << fmt(last.ssim, 4) << std::setw(10) << (t ? fmt(*t, 1) : "n/a") << "  "
-          << (bc && std::isfinite(level) ? speedup_text(speedup_at(*bc, *c, level)) : "n/a")
-          << (p.setting.name == b.setting.name ? " (baseline)" : "") << "\n";
-      }
-      if (std::isfinite(level))
-        s << "equal-PSNR level L = " << fmt(level, 2) << " dB ("
-          << (target ? "--target-psnr" : "baseline " + b.setting.name + "'s final PSNR - 0.5 dB")
-          << "); speedup = t_" << b.setting.name << "(L) / t_setting(L), n/a when one never reaches L\n";
-      double warm = 0, ev = 0;
-      for (const auto& [name, r] : results) warm += r.warmup_s, ev += r.eval_s;
-      s << "untimed: warm-up " << fmt(warm, 0) << " s, evaluation " << fmt(ev, 0) << " s\n";
-      for (const std::string& k : skipped) s << "skipped: " << k << " (an option this build's nova train does not know)\n";
-      summary = s.str();
+      const double level = equal_psnr_level(plan, curves, target);
+      summary = summary_text(head.str(), plan, curves, results, level, target.has_value(), skipped);
       write_atomically(out + "/tradeoff.csv", csv_text(curves));
-      // The plot: one series per training, named by every setting that shares it.
-      std::vector<Series> series;
-      for (const Planned& p : plan) {
-        if (!p.same_as.empty()) continue;
-        const auto it = results.find(p.setting.name);
-        if (it == results.end() || it->second.points.empty()) continue;
-        Series se;
-        se.label = p.setting.name;
-        for (const Planned& q : plan)
-          if (q.same_as == p.setting.name) se.label += " = " + q.setting.name;
-        for (const Point& pt : it->second.points) se.xy.emplace_back(pt.seconds, pt.psnr);
-        series.push_back(std::move(se));
-      }
-      write_png(out + "/tradeoff.png.tmp.png", plot(series, "PSNR against training time (" + (scene_arg.empty() ? std::string("default synthetic scene") : fs::path(scene_arg).filename().string()) + ")", level));
-      fs::rename(out + "/tradeoff.png.tmp.png", out + "/tradeoff.png");
+      const std::string scene_name =
+          scene_arg.empty() ? std::string("default synthetic scene") : fs::path(scene_arg).filename().string();
+      write_plot(out + "/tradeoff.png", plan, results, "PSNR against training time (" + scene_name + ")", level);
       write_atomically(out + "/summary.txt", summary);
     };
 

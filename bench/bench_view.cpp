@@ -14,10 +14,10 @@
 #include <sstream>
 
 #include "bench.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/runtime.hpp"
-#include "nova/view_renderer.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/runtime/runtime.hpp"
+#include "nova/model/view_renderer.hpp"
 #include "options.hpp"
 
 namespace nova::bench {

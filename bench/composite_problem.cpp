@@ -5,7 +5,7 @@
 #include <random>
 
 #include "bench.hpp"
-#include "nova/ops.hpp"
+#include "nova/loss/terms.hpp"
 
 namespace nova::bench {
 

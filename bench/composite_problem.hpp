@@ -5,8 +5,8 @@
 #include <memory>
 #include <vector>
 
-#include "nova/executor.hpp"
-#include "nova/render.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/render/render_composite.hpp"
 
 namespace nova::bench {
 

@@ -8,9 +8,10 @@
 #include <vector>
 
 #include "bench.hpp"
-#include "nova/executor.hpp"
-#include "nova/gemm.hpp"
-#include "nova/ops.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/ops/linalg/dense.hpp"
+#include "nova/loss/terms.hpp"
 
 namespace nova::bench {
 namespace {

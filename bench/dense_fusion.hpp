@@ -5,7 +5,7 @@
 #include <functional>
 #include <string>
 
-#include "nova/runtime.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::bench {
 

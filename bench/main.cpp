@@ -8,7 +8,7 @@
 #include <unistd.h>
 
 #include "bench.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::bench {
 

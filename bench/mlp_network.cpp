@@ -1,6 +1,6 @@
 #include "mlp_network.hpp"
 
-#include "nova/ops.hpp"
+#include "nova/loss/terms.hpp"
 
 namespace nova::bench {
 

@@ -4,8 +4,8 @@
 // kept.
 #include <memory>
 
-#include "nova/executor.hpp"
-#include "nova/mlp.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/model/mlp.hpp"
 
 namespace nova::bench {
 

@@ -3,9 +3,25 @@
 
 #include <sstream>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::bench {
+
+std::vector<std::string> take_repeated(std::vector<std::string>& args, const std::string& option,
+                                       const std::string& value_hint) {
+  const std::string flag = "--" + option;
+  std::vector<std::string> rest, values;
+  for (size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == flag) {
+      if (i + 1 >= args.size()) throw Error(flag + " needs a value (" + value_hint + ")");
+      values.push_back(args[++i]);
+    } else {
+      rest.push_back(args[i]);
+    }
+  }
+  args = std::move(rest);
+  return values;
+}
 
 Options::Options(const std::vector<std::string>& args, const std::map<std::string, std::string>& defaults)
     : values_(defaults) {

@@ -7,6 +7,12 @@
 
 namespace nova::bench {
 
+// Takes every `--option VALUE` of a repeatable option out of `args` (before Options parses
+// the single-valued rest) and returns the values in order. Error naming `value_hint` when the
+// last one has no value.
+std::vector<std::string> take_repeated(std::vector<std::string>& args, const std::string& option,
+                                       const std::string& value_hint);
+
 class Options {
  public:
   // `defaults` names every option; a default of "off" or "on" makes it a flag. Error naming

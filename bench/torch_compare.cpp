@@ -7,7 +7,7 @@
 
 #include "bench.hpp"
 #include "mlp_network.hpp"
-#include "nova/optim.hpp"
+#include "nova/train/optim.hpp"
 #include "torch_peer.hpp"
 
 namespace nova::bench {

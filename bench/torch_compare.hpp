@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "nova/mlp.hpp"
-#include "nova/runtime.hpp"
+#include "nova/model/mlp.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::bench {
 

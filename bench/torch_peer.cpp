@@ -8,7 +8,7 @@
 #include <unistd.h>
 #include <vector>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "torch_mlp_script.hpp"  // generated: kTorchMlpScript, the text of bench/torch_mlp.py
 
 namespace nova::bench {

@@ -7,10 +7,10 @@
 #include <set>
 #include <sstream>
 
-#include "nova/error.hpp"
-#include "nova/gemm.hpp"
-#include "nova/io/visualize.hpp"
-#include "nova/train_config.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/io/charts.hpp"
+#include "nova/train/train_config.hpp"
 
 namespace nova::tradeoff {
 

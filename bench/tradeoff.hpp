@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "nova/scene.hpp"
+#include "nova/model/scene.hpp"
 
 namespace nova::tradeoff {
 
@@ -29,7 +29,7 @@ std::string trim(const std::string& s);
 // "NAME[:KEY=VALUE[,KEY=VALUE...]]". NAME: letters, digits, '.', '_', '+', '-' (it names a
 // run folder and a CSV field). KEY: a `nova train` option (checked later, against the build:
 // see unknown_keys) or `gemm` / `NOVA_GEMM` with the value tuned, clblast or kernels (the
-// GEMM modes of include/nova/gemm.hpp). Error (exit 2)
+// GEMM modes of include/nova/ops/linalg/gemm.hpp). Error (exit 2)
 // naming the setting on anything else.
 Setting parse_setting(const std::string& text, const std::string& origin = "--setting");
 

@@ -1,7 +1,8 @@
 # The installed package works for a program outside nova's tree (examples/CMakeLists.txt runs
 # this as the CTest test install_package):
-#   1. cmake --install BUILD_DIR --prefix WORK_DIR/prefix: the I/O headers in include/nova/io/,
-#      the core's in include/nova/, and no package file naming nlohmann-json
+#   1. cmake --install BUILD_DIR --prefix WORK_DIR/prefix: every room's headers at their path
+#      under include/nova/ (the I/O rooms' only with nova_io), and no package file naming
+#      nlohmann-json
 #   2. examples/ configured on its own with CMAKE_PREFIX_PATH=prefix (find_package(nova CONFIG)),
 #      built, and embed_core run
 #   3. embed_core.cpp compiled with `pkg-config --cflags --libs nova` against the prefix, and run
@@ -18,23 +19,31 @@ function(step what)
 endfunction()
 
 step("cmake --install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
-foreach(f lib/cmake/nova/nova-config.cmake lib/pkgconfig/nova.pc include/nova/runtime.hpp lib/libnova_core.a)
+foreach(f lib/cmake/nova/nova-config.cmake lib/pkgconfig/nova.pc include/nova/runtime/runtime.hpp lib/libnova_core.a)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "the install has no ${f}")
   endif()
 endforeach()
-# Core and I/O headers apart, as in the tree: include/nova/io/ only where nova_io was built.
-file(GLOB io_headers RELATIVE ${SOURCE_DIR}/include ${SOURCE_DIR}/include/nova/io/*.hpp)
+# Every public header at its room's path; the I/O rooms' only where nova_io was built.
+include(${SOURCE_DIR}/cmake/layers.cmake)
+set(rooms ${NOVA_CORE_ROOMS})
 if(EXISTS ${prefix}/lib/libnova_io.a)
-  foreach(f IN LISTS io_headers)
-    get_filename_component(name ${f} NAME)
-    if(NOT EXISTS ${prefix}/include/${f} OR EXISTS ${prefix}/include/nova/${name})
-      message(FATAL_ERROR "the install does not keep ${f} apart: include/${f} missing or include/nova/${name} there")
+  list(APPEND rooms ${NOVA_IO_ROOMS})
+else()
+  foreach(room IN LISTS NOVA_IO_ROOMS)
+    if(EXISTS ${prefix}/include/nova/${room})
+      message(FATAL_ERROR "the install has include/nova/${room} (an I/O room) without libnova_io.a")
     endif()
   endforeach()
-elseif(EXISTS ${prefix}/include/nova/io)
-  message(FATAL_ERROR "the install has include/nova/io without libnova_io.a")
 endif()
+foreach(room IN LISTS rooms)
+  file(GLOB headers RELATIVE ${SOURCE_DIR}/include ${SOURCE_DIR}/include/nova/${room}/*.hpp)
+  foreach(f IN LISTS headers)
+    if(NOT EXISTS ${prefix}/include/${f})
+      message(FATAL_ERROR "the install has no include/${f}")
+    endif()
+  endforeach()
+endforeach()
 # JSON is a build-time dependency only: the package and the pkg-config files do not name it.
 file(GLOB_RECURSE package_files ${prefix}/lib/cmake/nova/*.cmake ${prefix}/lib/pkgconfig/*.pc)
 foreach(f IN LISTS package_files)

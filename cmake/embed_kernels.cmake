@@ -3,7 +3,7 @@
 # Invoked by the build with -DKERNEL_DIR=... -DOUTPUT=... -DSOURCES=a.cl,b.cl
 string(REPLACE "," ";" SOURCES "${SOURCES}")
 set(body "// Generated from kernels/*.cl by cmake/embed_kernels.cmake. Do not edit.\n")
-string(APPEND body "#include \"nova/kernel_sources.hpp\"\n\nnamespace nova {\n\n")
+string(APPEND body "#include \"nova/runtime/kernel_sources.hpp\"\n\nnamespace nova {\n\n")
 string(APPEND body "const std::vector<KernelSource>& kernel_sources() {\n")
 string(APPEND body "  static const std::vector<KernelSource> sources = {\n")
 foreach(src IN LISTS SOURCES)

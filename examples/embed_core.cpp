@@ -14,14 +14,15 @@
 #include <string>
 #include <vector>
 
-#include "nova/error.hpp"
-#include "nova/executor.hpp"
-#include "nova/graph.hpp"
-#include "nova/mlp.hpp"
-#include "nova/mlp_fit.hpp"
-#include "nova/ops.hpp"
-#include "nova/optim.hpp"
-#include "nova/runtime.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/graph/graph.hpp"
+#include "nova/model/mlp.hpp"
+#include "nova/train/mlp_fit.hpp"
+#include "nova/ops/encoding/positional_encoding.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/train/optim.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace {
 

@@ -16,8 +16,8 @@
 
 // The epilogue of a dense layer's forward, y = act(v + bias[column]), where v is the finished
 // alpha op(A) op(B) + beta C (never a partial sum of a split reduction). GEMM_BIAS_ACT (a build
-// option) turns it on and names the activation as activation.cl's ACT does: 0 identity,
-// 1 ReLU, 2 sigmoid, 3 softplus, with the prelude's expressions as activation.cl's
+// option) turns it on and names the activation as bias_act.cl's ACT does: 0 identity,
+// 1 ReLU, 2 sigmoid, 3 softplus, with the prelude's expressions as bias_act.cl's
 // act_forward (test_dense checks that the fused and the two-pass results agree). The bias is added in a statement of its own so that the compiler cannot
 // contract it with alpha * acc into one fma: the rounding stays that of the two-pass path.
 // GEMM_ACT works on float and floatn alike.

@@ -1,8 +1,8 @@
 // Batch statistics of a batch split over ranks (data-parallel training, distributed.hpp):
-// each rank sums over its own rays, the sums meet through rank_sum (host/ops/rank_sum.cpp),
+// each rank sums over its own rays, the sums meet through rank_sum (host/ops/tensor/rank_sum.cpp),
 // and the statistic is taken of the whole batch's sums, so every rank normalises as one
 // process would. Two passes as the single-process kernels (depth_moments in depth_loss.cl,
-// free_space_fit in free_space.cl): first (sum w, sum w p, sum w t), then, about the whole
+// free_space_fit in free_space_loss.cl): first (sum w, sum w p, sum w t), then, about the whole
 // batch's means, (sum w dp^2, sum w dt^2, sum w dp dt). w_r = valid_r, times mask_r with
 // use_mask. R is one rank's rays: one work-item runs the sums in a fixed order.
 

@@ -2,7 +2,7 @@
 // which exact resume needs, and no PoCL barrier pitfalls).
 
 // Stage 2 of a column sum whose stage 1 wrote partial[parts, batch_cols] (for example
-// bias_grad_partial in activation.cl):
+// bias_grad_partial in bias_act.cl):
 // out[j] (+)= sum_p partial[p, j].
 __kernel void colsum_finish(__global const float* partial, __global float* out, uint batch_cols,
                             uint parts, int accumulate) {

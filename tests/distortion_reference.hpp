@@ -1,5 +1,5 @@
 #pragma once
-// Float64 reference of the distortion loss (include/nova/losses.hpp, kernels/distortion.cl):
+// Float64 reference of the distortion loss (include/nova/loss/terms.hpp, kernels/distortion_loss.cl):
 // every sample pair summed directly (the kernel walks prefix sums), and the inputs the tests
 // draw for it.
 #include <algorithm>
@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/render.hpp"
+#include "nova/render/render_composite.hpp"
 
 namespace nova::test {
 

@@ -1,14 +1,13 @@
 #pragma once
-// Float64 reference of the free-space loss (include/nova/losses.hpp, kernels/free_space.cl),
+// Float64 reference of the free-space loss (include/nova/loss/terms.hpp, kernels/free_space_loss.cl),
 // its central differences, and one device run of the op on the same case.
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/executor.hpp"
-#include "nova/losses.hpp"
-#include "nova/ops.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/loss/terms.hpp"
 
 namespace nova::test {
 

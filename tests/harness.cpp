@@ -5,7 +5,7 @@
 #include <memory>
 #include <sstream>
 
-#include "nova/ops.hpp"
+#include "nova/loss/terms.hpp"
 
 namespace nova::test {
 

@@ -8,10 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "nova/executor.hpp"
-#include "nova/graph.hpp"
-#include "nova/ops.hpp"
-#include "nova/runtime.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/graph/graph.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/ops/encoding/positional_encoding.hpp"
+#include "nova/ops/linalg/dense.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::test {
 

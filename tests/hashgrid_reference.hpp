@@ -1,5 +1,5 @@
 #pragma once
-// Float64 reference of the hash encoding (include/nova/hash_grid.hpp, kernels/hashgrid.cl):
+// Float64 reference of the hash encoding (include/nova/ops/encoding/hash_encoding.hpp, kernels/hash_encoding.cl):
 // the vertices each position reads with their weights, the encoding they sum to, and the
 // positions the tests draw.
 #include <algorithm>
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/hash_grid.hpp"
+#include "nova/ops/encoding/hash_encoding.hpp"
 
 namespace nova::test {
 

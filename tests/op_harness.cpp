@@ -10,8 +10,7 @@
 #include <sstream>
 #include <typeinfo>
 
-#include "nova/executor.hpp"
-#include "nova/ops.hpp"
+#include "nova/graph/executor.hpp"
 
 namespace nova::test {
 

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "nova/error.hpp"
-#include "nova/ops.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/loss/terms.hpp"
 
 namespace nova::test {
 

@@ -13,9 +13,9 @@
 
 #include "free_space_reference.hpp"
 #include "harness.hpp"
-#include "nova/distributed.hpp"
-#include "nova/executor.hpp"
-#include "nova/graph.hpp"
+#include "nova/graph/distributed.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/graph/graph.hpp"
 #include "render_reference.hpp"
 
 namespace nova::test {

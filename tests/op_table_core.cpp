@@ -7,8 +7,11 @@
 #include <memory>
 
 #include "op_table.hpp"
-#include "nova/ops.hpp"
-#include "nova/random.hpp"
+#include "nova/ops/linalg/dense.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "nova/ops/encoding/positional_encoding.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/sampling/random.hpp"
 #include "random_reference.hpp"
 
 namespace nova::test {

@@ -9,9 +9,9 @@
 #include <utility>
 
 #include "hashgrid_reference.hpp"
-#include "nova/hash_grid.hpp"
-#include "nova/occupancy.hpp"
-#include "nova/ops.hpp"
+#include "nova/ops/encoding/hash_encoding.hpp"
+#include "nova/sampling/occupancy.hpp"
+#include "nova/ops/linalg/dense.hpp"
 #include "op_table.hpp"
 #include "packing_reference.hpp"
 

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/gemm.hpp"
-#include "nova/optim.hpp"
-#include "nova/runtime.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/train/optim.hpp"
+#include "nova/runtime/runtime.hpp"
 #include "op_harness.hpp"
 #include "op_table.hpp"
 

@@ -7,9 +7,9 @@
 
 #include "conventions_reference.hpp"
 #include "loss_reference.hpp"
-#include "nova/losses.hpp"
+#include "nova/loss/terms.hpp"
 #include "op_table.hpp"
-#include "ops/group_ratio.hpp"
+#include "loss/group_ratio.hpp"
 
 namespace nova::test {
 

@@ -3,8 +3,8 @@
 #include <cmath>
 
 #include "hashgrid_reference.hpp"
-#include "nova/hash_grid.hpp"
-#include "nova/motion.hpp"
+#include "nova/ops/encoding/hash_encoding.hpp"
+#include "nova/sampling/rigid_motion.hpp"
 #include "op_table.hpp"
 
 namespace nova::test {

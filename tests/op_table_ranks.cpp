@@ -11,8 +11,8 @@
 
 #include "free_space_reference.hpp"
 #include "loss_reference.hpp"
-#include "nova/losses.hpp"
-#include "nova/rank_sum.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/ops/tensor/rank_sum.hpp"
 #include "op_table.hpp"
 #include "twin_ranks_reducer.hpp"
 

@@ -8,8 +8,8 @@
 #include "distortion_reference.hpp"
 #include "free_space_reference.hpp"
 #include "loss_reference.hpp"
-#include "nova/losses.hpp"
-#include "nova/render.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/render/render_composite.hpp"
 #include "op_table.hpp"
 
 namespace nova::test {

@@ -3,8 +3,8 @@
 // work-groups, a partial last one) and small cases.
 #include <cmath>
 
-#include "nova/rays.hpp"
-#include "nova/render.hpp"
+#include "nova/sampling/rays.hpp"
+#include "nova/render/render_composite.hpp"
 #include "op_table.hpp"
 #include "rays_reference.hpp"
 

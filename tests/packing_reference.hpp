@@ -1,12 +1,12 @@
 #pragma once
-// Float64 (integer) reference of the packing ops (include/nova/occupancy.hpp,
+// Float64 (integer) reference of the packing ops (include/nova/sampling/occupancy.hpp,
 // kernels/packing.cl): which rows a select keeps, and the grids the tests select with.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
-#include "nova/occupancy.hpp"
+#include "nova/sampling/occupancy.hpp"
 
 namespace nova::test {
 

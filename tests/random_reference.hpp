@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "nova/random.hpp"
+#include "nova/sampling/random.hpp"
 
 namespace nova::test {
 

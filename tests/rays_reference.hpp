@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/camera.hpp"
-#include "nova/compose_spec.hpp"
-#include "nova/executor.hpp"
-#include "nova/rays.hpp"
+#include "nova/sampling/camera.hpp"
+#include "nova/model/compose_spec.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/sampling/rays.hpp"
 
 namespace nova::test {
 

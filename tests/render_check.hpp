@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/ops.hpp"
-#include "nova/render.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/render/render_composite.hpp"
 #include "render_reference.hpp"
 
 namespace nova::test {

@@ -1,13 +1,13 @@
 #pragma once
 // Float64 host reference of the compositing renderer, written straight from the formulas
-// (as include/nova/render.hpp states them) and independent of kernels/render.cl: no union-of-probabilities
+// (as include/nova/render/render_composite.hpp states them) and independent of kernels/render.cl: no union-of-probabilities
 // trick, no reverse scan; gradients come from central differences of this function.
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/render.hpp"
+#include "nova/render/render_composite.hpp"
 
 namespace nova::test {
 

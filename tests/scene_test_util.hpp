@@ -11,8 +11,8 @@
 #include <string>
 #include <unistd.h>
 
-#include "nova/error.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/data/synth.hpp"
 
 namespace nova::test {
 

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "nova/augment.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/train/augment.hpp"
+#include "nova/data/synth.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

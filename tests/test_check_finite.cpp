@@ -5,9 +5,8 @@
 #include <limits>
 
 #include "harness.hpp"
-#include "nova/losses.hpp"
-#include "nova/ops.hpp"
-#include "nova/render.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/render/render_composite.hpp"
 
 using namespace nova;
 using namespace nova::test;

@@ -6,9 +6,9 @@
 #include <cstring>
 #include <limits>
 
-#include "nova/checkpoint.hpp"
+#include "nova/model/checkpoint.hpp"
 #include "scene_test_util.hpp"
-#include "nerf/crc32.hpp"
+#include "model/crc32.hpp"
 
 using namespace nova;
 using namespace nova::test;

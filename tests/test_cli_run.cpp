@@ -6,7 +6,7 @@
 #include <sys/wait.h>
 
 #include "nova/io/image_io.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/video.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {

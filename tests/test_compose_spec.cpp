@@ -2,7 +2,7 @@
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "nova/io/compose_spec_text.hpp"
 #include "scene_test_util.hpp"
 

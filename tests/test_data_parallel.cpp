@@ -24,10 +24,10 @@
 #include <set>
 
 #include "harness.hpp"
-#include "nova/distributed.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/trainer.hpp"
+#include "nova/graph/distributed.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/train/trainer.hpp"
 #include "scene_test_util.hpp"
 #include "thread_reducer.hpp"
 

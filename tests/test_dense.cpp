@@ -41,9 +41,10 @@
 #include <unistd.h>
 
 #include "harness.hpp"
-#include "nova/executor.hpp"
-#include "nova/gemm.hpp"
-#include "nova/ops.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/ops/linalg/dense.hpp"
+#include "nova/loss/terms.hpp"
 
 using namespace nova;
 using nova::test::random_floats;

@@ -9,8 +9,8 @@
 
 #include "harness.hpp"
 #include "loss_reference.hpp"
-#include "nova/executor.hpp"
-#include "nova/losses.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/loss/terms.hpp"
 
 using namespace nova;
 using nova::test::random_floats;

@@ -13,8 +13,8 @@
 #include <cmath>
 
 #include "harness.hpp"
-#include "nova/executor.hpp"
-#include "nova/random.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/sampling/random.hpp"
 #include "random_reference.hpp"
 
 using namespace nova;

@@ -5,10 +5,10 @@
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 
-#include "nova/disparity_fit.hpp"
-#include "nova/io/llff_poses.hpp"
+#include "nova/train/disparity_fit.hpp"
+#include "nova/data/llff_poses.hpp"
 #include "nova/io/npy.hpp"
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

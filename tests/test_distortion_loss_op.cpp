@@ -9,9 +9,9 @@
 
 #include "distortion_reference.hpp"
 #include "harness.hpp"
-#include "nova/executor.hpp"
-#include "nova/losses.hpp"
-#include "nova/render.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/render/render_composite.hpp"
 
 using namespace nova;
 using nova::test::OpUnderTest;

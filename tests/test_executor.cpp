@@ -3,10 +3,11 @@
 #include <random>
 
 #include "harness.hpp"
-#include "nova/executor.hpp"
-#include "nova/mlp.hpp"
-#include "nova/ops.hpp"
-#include "nova/tuning.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/model/mlp.hpp"
+#include "nova/ops/encoding/positional_encoding.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/tuning/tuning.hpp"
 
 using namespace nova;
 
@@ -118,7 +119,7 @@ BOOST_AUTO_TEST_CASE(reference_mlp_plan_needs_less_than_all_tensors) {
   BOOST_TEST(ex.parameter_count() == expected);
 }
 
-// The two arena layouts (nova/tuning.hpp) run the same ops on the same values: loss, output
+// The two arena layouts (nova/tuning/tuning.hpp) run the same ops on the same values: loss, output
 // and every parameter gradient agree bit for bit; the planned arena reuses memory (its
 // sub-buffers overlap), the separate one gives each tensor a buffer of its own.
 BOOST_AUTO_TEST_CASE(separate_buffers_give_the_arenas_bits) {

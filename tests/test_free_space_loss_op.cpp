@@ -10,9 +10,8 @@
 
 #include "free_space_reference.hpp"
 #include "harness.hpp"
-#include "nova/executor.hpp"
-#include "nova/losses.hpp"
-#include "nova/ops.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/loss/terms.hpp"
 
 using namespace nova;
 using namespace nova::test;

@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "harness.hpp"
-#include "nova/gemm.hpp"
+#include "nova/ops/linalg/gemm.hpp"
 
 using namespace nova;
 

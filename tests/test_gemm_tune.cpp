@@ -11,7 +11,7 @@
 #include <unistd.h>
 
 #include "harness.hpp"
-#include "nova/gemm.hpp"
+#include "nova/ops/linalg/gemm.hpp"
 
 using namespace nova;
 namespace fs = std::filesystem;

@@ -8,12 +8,12 @@
 #include <string>
 
 #include "harness.hpp"
-#include "nova/executor.hpp"
-#include "nova/nova_graphs.hpp"
-#include "nova/ops.hpp"
-#include "nova/rays.hpp"
-#include "nova/step_graphs.hpp"
-#include "nova/train_config.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/model/field_graphs.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "nova/sampling/rays.hpp"
+#include "nova/train/step_graphs.hpp"
+#include "nova/train/train_config.hpp"
 
 using namespace nova;
 using nova::test::random_floats;

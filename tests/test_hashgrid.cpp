@@ -18,10 +18,11 @@
 
 #include "harness.hpp"
 #include "hashgrid_reference.hpp"
-#include "nova/error.hpp"
-#include "nova/executor.hpp"
-#include "nova/hash_grid.hpp"
-#include "nova/ops.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/ops/encoding/hash_encoding.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "nova/loss/terms.hpp"
 
 using namespace nova;
 using nova::test::check_gradients;

@@ -5,7 +5,7 @@
 #include <opencv2/core.hpp>
 #include <random>
 
-#include "nova/io/image_metrics.hpp"
+#include "nova/metrics/image_metrics.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

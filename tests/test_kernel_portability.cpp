@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "nova/kernel_sources.hpp"
+#include "nova/runtime/kernel_sources.hpp"
 
 namespace {
 

@@ -7,10 +7,9 @@
 
 #include "harness.hpp"
 #include "loss_reference.hpp"
-#include "nova/losses.hpp"
-#include "nova/novel_view_loss.hpp"
-#include "nova/ops.hpp"
-#include "nova/render.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/loss/objective.hpp"
+#include "nova/render/render_composite.hpp"
 
 using namespace nova;
 using namespace nova::test;

@@ -10,10 +10,10 @@
 #include "data/fs_util.hpp"
 #include "masks/masks_steps.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/motion_masks.hpp"
+#include "nova/masks/motion_masks.hpp"
 #include "nova/io/npy.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/data/synth.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {

@@ -3,7 +3,7 @@
 #include <boost/test/unit_test.hpp>
 
 #include "harness.hpp"
-#include "nova/mlp_fit.hpp"
+#include "nova/train/mlp_fit.hpp"
 
 using namespace nova;
 

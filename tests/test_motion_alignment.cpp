@@ -3,9 +3,9 @@
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 
-#include "nova/io/llff_poses.hpp"
-#include "nova/io/synth.hpp"
-#include "nova/motion_alignment.hpp"
+#include "nova/data/llff_poses.hpp"
+#include "nova/data/synth.hpp"
+#include "nova/train/motion_alignment.hpp"
 
 using namespace nova;
 

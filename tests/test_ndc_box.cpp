@@ -7,9 +7,9 @@
 #include <cmath>
 #include <string>
 
-#include "nova/nova_fields.hpp"
-#include "nova/nova_graphs.hpp"
-#include "nova/train_config.hpp"
+#include "nova/model/fields.hpp"
+#include "nova/model/field_graphs.hpp"
+#include "nova/train/train_config.hpp"
 
 using namespace nova;
 

@@ -10,12 +10,12 @@
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/nova_fields.hpp"
-#include "nova/nova_graphs.hpp"
-#include "nova/object_centre.hpp"
-#include "nova/train_config.hpp"
-#include "nova/view_renderer.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/model/fields.hpp"
+#include "nova/model/field_graphs.hpp"
+#include "nova/model/object_centre.hpp"
+#include "nova/train/train_config.hpp"
+#include "nova/model/view_renderer.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -5,10 +5,10 @@
 #include <string>
 
 #include "harness.hpp"
-#include "nova/error.hpp"
-#include "nova/executor.hpp"
-#include "nova/nova_fields.hpp"
-#include "nova/train_config.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/model/fields.hpp"
+#include "nova/train/train_config.hpp"
 
 using namespace nova;
 using namespace nova::test;

@@ -25,9 +25,9 @@
 #include <vector>
 
 #include "harness.hpp"
-#include "nova/error.hpp"
-#include "nova/executor.hpp"
-#include "nova/kernel_sources.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/runtime/kernel_sources.hpp"
 #include "op_harness.hpp"
 #include "op_table.hpp"
 

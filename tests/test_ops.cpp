@@ -10,9 +10,11 @@
 #include <cmath>
 
 #include "harness.hpp"
-#include "nova/mlp.hpp"
-#include "nova/ops.hpp"
-#include "nova/optim.hpp"
+#include "nova/model/mlp.hpp"
+#include "nova/ops/linalg/dense.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/train/optim.hpp"
 
 using namespace nova;
 using nova::test::check_gradients;

@@ -22,11 +22,13 @@
 
 #include "harness.hpp"
 #include "packing_reference.hpp"
-#include "nova/error.hpp"
-#include "nova/executor.hpp"
-#include "nova/occupancy.hpp"
-#include "nova/ops.hpp"
-#include "nova/render.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/sampling/occupancy.hpp"
+#include "nova/ops/linalg/dense.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "nova/ops/encoding/positional_encoding.hpp"
+#include "nova/render/render_composite.hpp"
 
 using namespace nova;
 using nova::test::checker_grid;

@@ -16,10 +16,9 @@
 #include "free_space_reference.hpp"
 #include "harness.hpp"
 #include "loss_reference.hpp"
-#include "nova/executor.hpp"
-#include "nova/losses.hpp"
-#include "nova/ops.hpp"
-#include "nova/rank_sum.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/ops/tensor/rank_sum.hpp"
 #include "thread_reducer.hpp"
 #include "twin_ranks_reducer.hpp"
 

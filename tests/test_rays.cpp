@@ -9,12 +9,12 @@
 #include <cmath>
 
 #include "harness.hpp"
-#include "nova/mlp.hpp"
-#include "nova/ops.hpp"
-#include "nova/rays.hpp"
-#include "nova/render.hpp"
-#include "nova/compose_spec.hpp"
-#include "nova/executor.hpp"
+#include "nova/model/mlp.hpp"
+#include "nova/ops/encoding/positional_encoding.hpp"
+#include "nova/sampling/rays.hpp"
+#include "nova/render/render_composite.hpp"
+#include "nova/model/compose_spec.hpp"
+#include "nova/graph/executor.hpp"
 #include "rays_reference.hpp"
 
 using namespace nova;

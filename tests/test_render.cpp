@@ -5,7 +5,7 @@
 #include <boost/test/unit_test.hpp>
 
 #include "harness.hpp"
-#include "nova/render.hpp"
+#include "nova/render/render_composite.hpp"
 
 using namespace nova;
 using namespace nova::test;

@@ -6,12 +6,12 @@
 #include <cmath>
 #include <limits>
 
-#include "nova/io/evaluation.hpp"
+#include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/llff_poses.hpp"
+#include "nova/data/llff_poses.hpp"
 #include "nova/io/npy.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/nova_graphs.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/model/field_graphs.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <string>
 
-#include "nova/nova_graphs.hpp"
-#include "nova/step_graphs.hpp"
-#include "nova/train_config.hpp"
+#include "nova/model/field_graphs.hpp"
+#include "nova/train/step_graphs.hpp"
+#include "nova/train/train_config.hpp"
 
 using namespace nova;
 

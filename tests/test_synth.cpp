@@ -4,8 +4,8 @@
 #include <chrono>
 #include <cmath>
 
-#include "nova/io/scene_io.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/data/synth.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

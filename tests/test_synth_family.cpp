@@ -12,8 +12,8 @@
 #include "io/image_codec.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/io/npy.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/data/synth.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

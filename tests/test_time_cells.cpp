@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <string>
 
-#include "nova/error.hpp"
-#include "nova/nova_fields.hpp"
-#include "nova/nova_graphs.hpp"
-#include "nova/train_config.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/model/fields.hpp"
+#include "nova/model/field_graphs.hpp"
+#include "nova/train/train_config.hpp"
 
 using namespace nova;
 

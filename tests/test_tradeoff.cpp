@@ -8,7 +8,7 @@
 
 #include "../bench/tradeoff.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/charts.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {

@@ -7,13 +7,13 @@
 #include <cstring>
 
 #include "harness.hpp"
-#include "nova/io/image_metrics.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/io/visualize.hpp"
-#include "nova/motion.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/trainer.hpp"
-#include "nova/view_renderer.hpp"
+#include "nova/metrics/image_metrics.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/io/pictures.hpp"
+#include "nova/sampling/rigid_motion.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/train/trainer.hpp"
+#include "nova/model/view_renderer.hpp"
 #include "scene_test_util.hpp"
 
 namespace nova::test {

@@ -9,9 +9,9 @@
 #include <unistd.h>
 
 #include "harness.hpp"
-#include "nova/gemm.hpp"
-#include "nova/render.hpp"
-#include "nova/tuning.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/render/render_composite.hpp"
+#include "nova/tuning/tuning.hpp"
 
 using namespace nova;
 namespace fs = std::filesystem;

@@ -9,8 +9,10 @@
 #include <opencv2/videoio.hpp>
 #endif
 
-#include "nova/io/image_metrics.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/metrics/image_metrics.hpp"
+#include "nova/io/charts.hpp"
+#include "nova/io/pictures.hpp"
+#include "nova/io/video.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -4,10 +4,10 @@
 #include <boost/test/unit_test.hpp>
 
 #include "harness.hpp"
-#include "nova/gemm.hpp"
-#include "nova/kernel_sources.hpp"
-#include "nova/render.hpp"
-#include "nova/tuning.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/runtime/kernel_sources.hpp"
+#include "nova/render/render_composite.hpp"
+#include "nova/tuning/tuning.hpp"
 
 using namespace nova;
 
@@ -17,7 +17,7 @@ BOOST_AUTO_TEST_CASE(compile_every_program) {
   Runtime& rt = test::runtime();
   for (const auto& k : kernel_sources())
     if (k.family != kKernelPrelude) rt.prepare(std::string(k.family));  // the prelude comes with each
-  for (int act = 1; act <= 3; ++act) rt.prepare("activation", ActivationParams{act}.to_defines());
+  for (int act = 1; act <= 3; ++act) rt.prepare("bias_act", ActivationParams{act}.to_defines());
   // render.cl is built per NeRF count: the counts the suites use, with the default options.
   for (size_t n : {1, 2, 3, 4, 8}) rt.prepare("render", render_program_options(n));
   const std::vector<float> ones(64 * 64, 1.0f);

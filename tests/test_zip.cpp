@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "io/zip.hpp"
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 #include "scene_test_util.hpp"
 
 using namespace nova;

@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-#include "nova/distributed.hpp"
+#include "nova/graph/distributed.hpp"
 
 namespace nova::test {
 

@@ -6,7 +6,7 @@
 // (thread_reducer.hpp; test_rank_sum.cpp checks both agree).
 #include <vector>
 
-#include "nova/distributed.hpp"
+#include "nova/graph/distributed.hpp"
 
 namespace nova::test {
 

@@ -3,9 +3,9 @@
 #include <iostream>
 
 #include "cli/options.hpp"
-#include "nova/gemm.hpp"
-#include "nova/tuning.hpp"
-#include "nova/runtime.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/tuning/tuning.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::cli {
 

@@ -17,11 +17,10 @@
 #include "cli/options.hpp"
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
-#include "nova/io/evaluation.hpp"
+#include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/image_metrics.hpp"
-#include "nova/io/visualize.hpp"
-#include "nova/runtime.hpp"
+#include "nova/metrics/image_metrics.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::cli {
 namespace {

@@ -6,7 +6,7 @@
 #include <iostream>
 
 #include "cli/commands.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::cli {
 

@@ -6,8 +6,8 @@
 
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
-#include "nova/io/motion_masks.hpp"
-#include "nova/io/scene_io.hpp"
+#include "nova/masks/motion_masks.hpp"
+#include "nova/data/scene_io.hpp"
 
 namespace nova::cli {
 

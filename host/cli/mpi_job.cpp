@@ -15,7 +15,7 @@
 #include <thread>
 #include <vector>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "runtime/parse_number.hpp"
 
 #ifdef NOVA_WITH_MPI

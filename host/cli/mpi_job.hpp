@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "nova/distributed.hpp"
-#include "nova/runtime.hpp"
+#include "nova/graph/distributed.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::cli {
 

@@ -16,12 +16,13 @@
 #include "cli/options.hpp"
 #include "cli/render_progress.hpp"
 #include "cli/run_setup.hpp"
-#include "nova/camera.hpp"
+#include "nova/sampling/camera.hpp"
 #include "nova/io/compose_spec_text.hpp"
-#include "nova/io/evaluation.hpp"
+#include "nova/eval/evaluation.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/visualize.hpp"
-#include "nova/runtime.hpp"
+#include "nova/io/pictures.hpp"
+#include "nova/io/video.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::cli {
 namespace {

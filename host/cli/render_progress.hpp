@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include "nova/progress_line.hpp"
+#include "nova/train/progress_line.hpp"
 
 namespace nova::cli {
 

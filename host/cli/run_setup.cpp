@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <unistd.h>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::cli {
 namespace fs = std::filesystem;

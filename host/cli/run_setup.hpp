@@ -2,16 +2,16 @@
 // Loading the scene a run trains or is evaluated on, the same way for train, render and eval.
 #include <string>
 
-#include "nova/io/evaluation.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/scene.hpp"
-#include "nova/train_config.hpp"
-#include "nova/view_renderer.hpp"
+#include "nova/eval/evaluation.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/model/scene.hpp"
+#include "nova/train/train_config.hpp"
+#include "nova/model/view_renderer.hpp"
 
 namespace nova::cli {
 
 // load_training_scene (the run's factor and hold-out split) is nova::load_training_scene in
-// nova/io/evaluation.hpp, shared with nova-bench.
+// nova/eval/evaluation.hpp, shared with nova-bench.
 
 // A trained run and its scene (the run's own unless `scene_dir` is given).
 struct OpenRun {

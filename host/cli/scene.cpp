@@ -4,7 +4,7 @@
 #include <iostream>
 
 #include "cli/options.hpp"
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 
 namespace nova::cli {
 

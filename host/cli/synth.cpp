@@ -4,8 +4,8 @@
 
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
-#include "nova/error.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/data/synth.hpp"
 
 namespace nova::cli {
 

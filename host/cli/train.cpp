@@ -9,12 +9,12 @@
 #include "cli/mpi_job.hpp"
 #include "cli/options.hpp"
 #include "cli/run_setup.hpp"
-#include "nova/gemm.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/progress_line.hpp"
-#include "nova/run_folder.hpp"
-#include "nova/runtime.hpp"
-#include "nova/trainer.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/train/progress_line.hpp"
+#include "nova/train/run_folder.hpp"
+#include "nova/runtime/runtime.hpp"
+#include "nova/train/trainer.hpp"
 #include "runtime/read_file.hpp"
 
 namespace nova::cli {

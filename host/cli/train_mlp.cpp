@@ -4,8 +4,8 @@
 #include <iostream>
 
 #include "cli/options.hpp"
-#include "nova/mlp_fit.hpp"
-#include "nova/runtime.hpp"
+#include "nova/train/mlp_fit.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova::cli {
 

@@ -14,9 +14,9 @@
 #include <sstream>
 
 #include "cli/options.hpp"
-#include "nova/gemm.hpp"
-#include "nova/gemm_tuning.hpp"
-#include "nova/runtime.hpp"
+#include "nova/ops/linalg/gemm.hpp"
+#include "nova/tuning/gemm_tuning.hpp"
+#include "nova/runtime/runtime.hpp"
 #include "runtime/parse_number.hpp"
 
 namespace nova::cli {

@@ -5,9 +5,9 @@
 #include <nlohmann/json.hpp>
 
 #include "data/fs_util.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 #include "runtime/read_file.hpp"
 
 namespace nova {

@@ -6,9 +6,9 @@
 
 #include "data/fs_util.hpp"
 #include "io/zip.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "nova/io/npy.hpp"
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 
 namespace nova {
 

@@ -6,7 +6,7 @@
 #include <unistd.h>
 #include <utility>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "runtime/read_file.hpp"
 
 namespace nova::data {

@@ -1,6 +1,6 @@
 // The hold-out split and the objects region of a ground-truth view: plain data work on a
 // Scene, beside the readers that fill one.
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 

@@ -1,6 +1,6 @@
-// LLFF pose processing (see include/nova/io/llff_poses.hpp). Plain double arithmetic, no
+// LLFF pose processing (see include/nova/data/llff_poses.hpp). Plain double arithmetic, no
 // libraries, so the synthetic generator and the readers compute exactly the same transform.
-#include "nova/io/llff_poses.hpp"
+#include "nova/data/llff_poses.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,18 +1,18 @@
 // Readers for poses_bounds.npy layouts: NOVA / DynamicNeRF (with masks, disparity, ground
 // truth) and plain LLFF (static). Pose processing follows the reference loader; see
-// include/nova/io/llff_poses.hpp.
+// include/nova/data/llff_poses.hpp.
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "data/fs_util.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "nova/io/compose_spec_text.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/camera.hpp"
-#include "nova/io/llff_poses.hpp"
+#include "nova/sampling/camera.hpp"
+#include "nova/data/llff_poses.hpp"
 #include "nova/io/npy.hpp"
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 
 namespace nova {
 namespace {

@@ -1,5 +1,5 @@
 // Format detection, the load_scene entry point, and the printed scene summary.
-#include "nova/io/scene_io.hpp"
+#include "nova/data/scene_io.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "data/fs_util.hpp"
-#include "nova/error.hpp"
-#include "nova/nova_graphs.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/model/field_graphs.hpp"
 
 namespace nova {
 

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "data/synth_geometry.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 namespace {

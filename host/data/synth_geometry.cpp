@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "data/synth_geometry.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::synth {
 namespace {

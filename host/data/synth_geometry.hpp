@@ -3,7 +3,7 @@
 // Plain double arithmetic in a fixed order: the fixed presets' bytes depend on it.
 #include <cmath>
 
-#include "nova/io/synth.hpp"
+#include "nova/data/synth.hpp"
 
 namespace nova::synth {
 

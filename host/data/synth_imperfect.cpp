@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "nova/io/synth.hpp"
+#include "nova/data/synth.hpp"
 
 namespace nova {
 namespace {

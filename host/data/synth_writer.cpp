@@ -5,12 +5,12 @@
 #include <sstream>
 
 #include "data/fs_util.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "nova/io/compose_spec_text.hpp"
 #include "nova/io/image_io.hpp"
 #include "nova/io/npy.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/io/synth.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/data/synth.hpp"
 
 namespace nova {
 namespace {

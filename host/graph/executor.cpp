@@ -1,5 +1,5 @@
-#include "nova/executor.hpp"
-#include "nova/tuning.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/tuning/tuning.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -1,9 +1,9 @@
-#include "nova/graph.hpp"
+#include "nova/graph/graph.hpp"
 
 #include <algorithm>
 #include <sstream>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 

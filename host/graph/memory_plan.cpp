@@ -1,4 +1,4 @@
-#include "nova/memory_plan.hpp"
+#include "nova/graph/memory_plan.hpp"
 
 #include <algorithm>
 #include <numeric>

@@ -7,7 +7,7 @@
 #include <limits>
 #include <sstream>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "runtime/parse_number.hpp"
 #include "runtime/read_file.hpp"
 

@@ -1,12 +1,12 @@
 // See image_codec.hpp. Decoding is lossless for PNG in both codecs (the same pixels); JPEG
 // decoders differ in their IDCT and chroma upsampling by a few levels (tests/test_image_codec).
-#include "image_codec.hpp"
+#include "io/image_codec.hpp"
 
 #include <cstdlib>
 #include <cstring>
 #include <limits>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 #if NOVA_HAVE_IMGCODECS
 #include <opencv2/imgcodecs.hpp>

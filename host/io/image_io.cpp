@@ -10,8 +10,8 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "image_codec.hpp"
-#include "nova/error.hpp"
+#include "io/image_codec.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 namespace {

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "runtime/read_file.hpp"
 
 namespace nova::io {

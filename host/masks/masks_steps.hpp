@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "nova/io/motion_masks.hpp"
+#include "nova/masks/motion_masks.hpp"
 
 namespace nova::masks {
 

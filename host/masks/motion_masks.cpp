@@ -1,6 +1,6 @@
 // make_motion_masks and write_motion_masks (include/nova/io/motion_masks.hpp): the steps of
 // masks_steps.hpp in order, and the motion_masks folder with its check pictures.
-#include "nova/io/motion_masks.hpp"
+#include "nova/masks/motion_masks.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -11,10 +11,11 @@
 
 #include "data/fs_util.hpp"
 #include "masks/masks_steps.hpp"
-#include "nova/disparity_fit.hpp"
-#include "nova/error.hpp"
+#include "nova/train/disparity_fit.hpp"
+#include "nova/runtime/error.hpp"
 #include "nova/io/image_io.hpp"
-#include "nova/io/visualize.hpp"
+#include "nova/io/charts.hpp"
+#include "nova/io/pictures.hpp"
 
 namespace nova {
 namespace {

@@ -4,7 +4,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "masks/masks_steps.hpp"
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova::masks {
 

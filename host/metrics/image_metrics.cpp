@@ -1,13 +1,13 @@
 // PSNR and SSIM without OpenCV. PSNR follows OpenCV's formula step by step (same operations
 // in the same order) so the two agree to the last bit; SSIM filters separably in double.
-#include "nova/io/image_metrics.hpp"
+#include "nova/metrics/image_metrics.hpp"
 
 #include <cfloat>
 #include <cmath>
 #include <string>
 #include <vector>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 namespace {

@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "nova/runtime.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova {
 namespace {

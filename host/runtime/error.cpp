@@ -1,7 +1,7 @@
 #include <CL/cl.h>
 #include <CL/cl_ext.h>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 

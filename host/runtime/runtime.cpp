@@ -3,8 +3,8 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "nova/kernel_sources.hpp"
-#include "nova/runtime.hpp"
+#include "nova/runtime/kernel_sources.hpp"
+#include "nova/runtime/runtime.hpp"
 
 namespace nova {
 

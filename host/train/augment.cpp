@@ -1,10 +1,10 @@
 // Novel-view augmentation: camera rotation, its homography, bilinear warping, composite
-// targets (see include/nova/augment.hpp).
-#include "nova/augment.hpp"
+// targets (see include/nova/train/augment.hpp).
+#include "nova/train/augment.hpp"
 
 #include <cmath>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 namespace {

@@ -2,12 +2,12 @@
 // high disparity (log-spaced inside the scene's depth bounds), then a pattern search around
 // the best. Two unknowns and a cost that is cheap to evaluate make a search more robust than
 // a gradient method here: the colour cost is flat or multi-modal away from the answer.
-#include "nova/disparity_fit.hpp"
+#include "nova/train/disparity_fit.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "nova/camera.hpp"
+#include "nova/sampling/camera.hpp"
 #include "train/float_plane.hpp"
 
 namespace nova {

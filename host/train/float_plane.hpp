@@ -3,7 +3,7 @@
 // compare frames (motion_alignment.cpp, disparity_fit.cpp) sample.
 #include <vector>
 
-#include "nova/scene.hpp"
+#include "nova/model/scene.hpp"
 
 namespace nova {
 

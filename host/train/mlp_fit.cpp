@@ -1,11 +1,13 @@
-#include "nova/mlp_fit.hpp"
+#include "nova/train/mlp_fit.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <random>
 
-#include "nova/executor.hpp"
-#include "nova/optim.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/loss/terms.hpp"
+#include "nova/ops/encoding/positional_encoding.hpp"
+#include "nova/train/optim.hpp"
 
 namespace nova {
 

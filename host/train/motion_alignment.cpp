@@ -2,7 +2,7 @@
 // on a turn (axis-angle about the points' centroid) and a translation, with central-difference
 // Jacobians of residuals sampled from blurred images. Six unknowns and about a thousand points
 // make each step a few hundred thousand bilinear samples, so the host does it.
-#include "nova/motion_alignment.hpp"
+#include "nova/train/motion_alignment.hpp"
 
 #include <algorithm>
 #include <array>

@@ -6,20 +6,20 @@
 // previous one moved by the alignment. Without a usable disparity (none, or a video without
 // parallax) the objects do not turn: each frame's anchor is the mask's centroid in front of
 // what the static NeRF shows behind it.
-#include "nova/motion_init.hpp"
+#include "nova/train/motion_init.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <optional>
 
-#include "nova/camera.hpp"
-#include "nova/disparity_fit.hpp"
-#include "nova/error.hpp"
-#include "nova/executor.hpp"
-#include "nova/motion_alignment.hpp"
-#include "nova/nova_graphs.hpp"
-#include "nova/rays.hpp"
-#include "nova/step_graphs.hpp"
+#include "nova/sampling/camera.hpp"
+#include "nova/train/disparity_fit.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/train/motion_alignment.hpp"
+#include "nova/model/field_graphs.hpp"
+#include "nova/sampling/rays.hpp"
+#include "nova/train/step_graphs.hpp"
 
 namespace nova {
 namespace {

@@ -1,8 +1,8 @@
-#include "nova/pixel_batch.hpp"
+#include "nova/train/pixel_batch.hpp"
 
 #include <sstream>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 
 namespace nova {
 

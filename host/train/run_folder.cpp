@@ -1,10 +1,10 @@
-#include "nova/run_folder.hpp"
+#include "nova/train/run_folder.hpp"
 
 #include <filesystem>
 #include <utility>
 #include <vector>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "runtime/read_file.hpp"
 
 namespace nova {

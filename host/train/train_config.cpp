@@ -1,4 +1,6 @@
-#include "nova/train_config.hpp"
+// The option registry of TrainConfig: every `nova train` option with its help, its parser
+// and its range, and the checks across options.
+#include "nova/train/train_config.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -6,21 +8,17 @@
 #include <limits>
 #include <sstream>
 
-#include "nova/error.hpp"
+#include "nova/runtime/error.hpp"
 #include "runtime/parse_number.hpp"
+#include "train/config_trim.hpp"
 
 namespace nova {
 namespace {
 
+using detail::trim;
+
 [[noreturn]] void bad_value(const std::string& key, const std::string& value, const std::string& why) {
   throw Error("option '" + key + "': '" + value + "' " + why);
-}
-
-std::string trim(const std::string& s) {
-  const size_t a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  const size_t b = s.find_last_not_of(" \t\r");
-  return s.substr(a, b - a + 1);
 }
 
 long parse_int(const std::string& key, const std::string& text, long lo, long hi) {
@@ -277,77 +275,6 @@ std::vector<ConfigOption> make_options() {
 
 }  // namespace
 
-std::vector<std::string> preset_names() { return {"quick", "reference"}; }
-
-TrainConfig preset_config(const std::string& name) {
-  TrainConfig c;  // the defaults are the reference
-  if (name == "reference") {
-    c.preset = "reference";
-    // The public reference code's conventions, item by item (docs/training.md, "Loss conventions").
-    c.conventions = reference_conventions();
-    c.weights.order = 0.1f;
-    return c;
-  }
-  if (name != "quick") throw Error("option 'preset': '" + name + "' is not one of quick, reference");
-  c.preset = "quick";
-  // A multiresolution hash grid in place of the positional encoding, with a 2 x 64 trunk:
-  // on the default synthetic scene it fits training views to 27-29 dB in 1,000 joint steps
-  // where the 4 x 64 frequency network reached 24 in 2,500, at a similar cost per step.
-  c.field.encoding = Encoding::HashGrid;
-  c.field.depth = 2;
-  c.field.width = 64;
-  c.field.skip = -1;
-  c.field.pos_freqs = 8;
-  // 512 rays a step, not 256: on the family's dev seeds camera 0 gained 1.70 dB on average
-  // (every seed up), held-out cameras 1.47 and the composition targets 1.72; on the test seeds
-  // +0.22, +0.09 and +0.38 (two of four up on camera 0). The main job takes 217 s instead of
-  // 147: the hash grids' Adam update and the launches do not grow with the batch
-  // (docs/accuracy.md).
-  c.rays = 512;
-  c.samples = 32;
-  c.pretrain_steps = 500;
-  c.steps = 2000;
-  // 1e-2 (Instant-NGP's rate) collapses the density of D-NeRF's lego to nothing after ~100
-  // steps at 256 rays per step; 5e-3 learns it and the NDC scenes.
-  c.lr = 5e-3f;
-  c.lr_decay_steps = 2500;
-  c.weights.sparsity = 0.1f;
-  // Half the reference's depth weight: the correlation with a monocular disparity pulls the
-  // static NeRF's geometry towards the disparity's own errors (on nvidia_balloon1's poster
-  // wall pretraining fit its rays to 18.5 dB with 0.04 and 20.3 without), while the family's
-  // held-out cameras need the depth (dev seed 2: 20.9 dB held out with 0.04, 18.5 without).
-  // Chosen on the dev seeds (camera 0 +0.54 dB, held-out cameras +0.79, composition +0.58 on
-  // average, every seed up on camera 0) and nvidia_balloon1 (+0.33); docs/accuracy.md.
-  c.w_depth = 0.02f;
-  // An object seen from one camera per time can keep weight anywhere along that camera's
-  // rays in front of its surface; from camera 0 of the default synthetic scene that haze was
-  // the largest error. The free-space loss puts the surface where the disparity says.
-  c.w_free_space = 1.0f;
-  // Object pixels teach the static NeRF nothing, so it does not keep the objects' colours
-  // along their paths (ghosts behind every moved or removed instance).
-  c.static_background_only = true;
-  // Time cells shared by about three frames, and object grids that stop at 32 cells: an
-  // object seen from one camera per time cannot constrain finer levels, which fill with
-  // hash-collision noise seen from camera 0. On the default synthetic scene these took
-  // camera-0 PSNR from 24.03 dB to 25.36 (time cells) and 27.18 (object grid); on
-  // nvidia_balloon1 the object grid's finest level changed nothing at 240 or 480 pixels wide
-  // (18.61 / 17.86 dB against 18.59 / 17.82 at 512 cells; docs/accuracy.md).
-  c.field.hash_time_auto = true;
-  c.field.object_max_resolution = 32;
-  c.augment_start = 200;
-  // Every second joint step augmented (the reference: every third). Chosen on the family's dev
-  // seeds (camera 0 +0.18 dB, composition +0.22 on average) and confirmed on the test seeds
-  // (+0.73 dB and +0.45 on average, all four up; docs/accuracy.md).
-  c.augment_every = 2;
-  // A cell counts as empty under alpha 0.1 over its width: on the default synthetic scene
-  // this drops the static NeRF's low-density haze (which 0.01 keeps) and two thirds of the
-  // joint samples, 21.4 dB camera-0 PSNR against 20.1 without skipping.
-  c.occupancy_alpha = 0.1f;
-  c.checkpoint_every = 250;
-  c.log_every = 25;
-  return c;
-}
-
 const std::vector<ConfigOption>& config_options() {
   static const std::vector<ConfigOption> options = make_options();
   return options;
@@ -379,57 +306,6 @@ void validate(const TrainConfig& c) {
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");
   if (c.pretrain_steps + static_cast<long>(c.steps) <= 0)
     throw Error("options 'pretrain-steps' and 'steps': both are 0, nothing to train");
-}
-
-std::string format_config(const TrainConfig& c, const std::vector<std::string>& extra) {
-  std::ostringstream s;
-  s << "# nova train configuration (key = value; every key is a `nova train` option)\n";
-  for (const ConfigOption& o : config_options()) s << "# " << o.help << "\n" << o.key << " = " << o.get(c) << "\n";
-  for (const std::string& line : extra) s << line << "\n";
-  return s.str();
-}
-
-TrainConfig parse_config_text(const std::string& text, const std::string& origin,
-                              std::vector<std::pair<std::string, std::string>>* others, ConfigFile kind) {
-  std::vector<std::pair<std::string, std::string>> entries;
-  std::istringstream in(text);
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const std::string t = trim(line.substr(0, line.find('#')));
-    if (t.empty()) continue;
-    const size_t eq = t.find('=');
-    if (eq == std::string::npos)
-      throw Error(origin + ":" + std::to_string(number) + ": expected 'key = value', got '" + t + "'");
-    entries.emplace_back(trim(t.substr(0, eq)), trim(t.substr(eq + 1)));
-  }
-  TrainConfig c = preset_config("quick");
-  for (const auto& [k, v] : entries)  // the preset first: every other key overrides it
-    if (k == "preset") c = preset_config(v);
-  for (const auto& [k, v] : entries) {
-    if (k == "preset") continue;
-    bool known = false;
-    for (const ConfigOption& o : config_options())
-      if (o.key == k) {
-        try {
-          o.set(c, v);
-        } catch (const Error& e) {
-          throw Error(origin + ": " + e.what());
-        }
-        known = true;
-      }
-    if (!known) {
-      if (!others) throw Error(origin + ": unknown option '" + k + "'");
-      others->emplace_back(k, v);
-    }
-  }
-  if (kind == ConfigFile::RunFile)
-    for (const ConfigOption& o : config_options()) {
-      const bool written = std::any_of(entries.begin(), entries.end(), [&](const auto& e) { return e.first == o.key; });
-      if (!written && !o.before.empty()) o.set(c, o.before);
-    }
-  return c;
 }
 
 }  // namespace nova

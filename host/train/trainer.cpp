@@ -1,72 +1,23 @@
-#include "nova/trainer.hpp"
+#include "nova/train/trainer.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iomanip>
-#include <nlohmann/json.hpp>
-#include <optional>
-#include <sstream>
 
-#include "nova/augment.hpp"
-#include "nova/error.hpp"
-#include "nova/motion_init.hpp"
-#include "nova/pixel_batch.hpp"
-#include "nova/rays.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/train/motion_init.hpp"
+#include "nova/train/pixel_batch.hpp"
+#include "train/metrics_log.hpp"
+#include "train/step_batch.hpp"
+#include "nova/sampling/rays.hpp"
 
 namespace nova {
 namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kFormat = "nova-run-checkpoint 1";
-
-// A metrics value as the record keeps it: 7 significant digits (float32's), which the JSON
-// writer prints as the shortest text that reads back the same. Non-finite values are written
-// as null (nlohmann's default), so every line stays valid JSON.
-double metric_value(double v) {
-  if (!std::isfinite(v)) return v;
-  std::ostringstream s;
-  s << std::setprecision(7) << v;
-  return std::stod(s.str());
-}
-
-// One metrics.jsonl record; the keys in this order (ordered_json keeps insertion order).
-std::string metrics_record(const TrainProgress& p) {
-  nlohmann::ordered_json r;
-  r["step"] = p.step;
-  r["phase"] = p.phase;
-  r["loss"] = metric_value(p.loss);
-  for (const auto& [name, v] : p.terms) r[name] = metric_value(v);
-  r["psnr"] = metric_value(p.psnr);
-  r["lr"] = metric_value(p.lr);
-  r["augmented"] = p.augmented;
-  r["rays_per_s"] = metric_value(p.rays_per_s);
-  if (p.kept >= 0) {
-    r["samples_kept"] = metric_value(p.kept);
-    nlohmann::ordered_json occupied = nlohmann::ordered_json::array();
-    for (double f : p.occupied) occupied.push_back(metric_value(f));
-    r["occupied"] = std::move(occupied);
-  }
-  r["seconds"] = metric_value(p.seconds);
-  return r.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
-}
-
-// Keeps the metrics records of steps <= `step` (a resumed run continues the same file).
-void truncate_metrics(const std::string& path, long step) {
-  std::ifstream in(path);
-  if (!in) return;
-  std::string line, kept;
-  while (std::getline(in, line)) {
-    // A line that is not a record (cut short by a crash) goes too.
-    const nlohmann::json record = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
-    const auto at = record.is_object() ? record.find("step") : record.end();
-    if (at != record.end() && at->is_number_integer() && at->get<long>() <= step) kept += line + "\n";
-  }
-  in.close();
-  std::ofstream(path, std::ios::trunc) << kept;
-}
 
 void write_text_atomic(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
@@ -202,63 +153,19 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   const TrainConfig& c = config_;
   const bool joint = graph_joint_;
   const long phase_step = joint ? step_ - c.pretrain_steps : step_;
-  const size_t F = scene_.frames.size();
   size_t R = static_cast<size_t>(c.rays);  // this rank's rays once the batch is drawn
   const int N = graph_->nerfs;
 
-  size_t fi = static_cast<size_t>(uniform01(rng_) * static_cast<float>(F)) % F;
-  // Pretraining only sees background pixels: skip frames that have none.
-  if (!joint)
-    for (size_t tries = 0; regions_[fi][0].empty() && tries < F; ++tries) fi = (fi + 1) % F;
-  const Frame& frame = scene_.frames[fi];
-
-  bool augmented = joint && c.augment && phase_step >= c.augment_start &&
-                         (phase_step - c.augment_start) % c.augment_every == 0;
-  PixelBatch batch;
-  std::vector<Camera> cameras(static_cast<size_t>(N), frame.camera);
-  // The image each NeRF's own target colour comes from (the per-NeRF RGB loss under the
-  // reference conventions): the frame, or on an augmented step each object's warped view.
-  std::vector<Image8> nerf_images;
-  bool drawn = false;
-  // Two objects turned in opposite directions can leave no pixel that both warps cover
-  // (a 20 degree turn shifts a 160 px wide image by ~64 px): draw new turns a few times,
-  // then fall back to the original view.
-  for (int attempt = 0; augmented && !drawn && attempt < 4; ++attempt) {
-    std::vector<std::optional<CameraRotation>> rot;
-    for (int k = 0; k < scene_.num_objects; ++k) rot.push_back(random_rotation(rng_, c.augment_degrees));
-    AugmentedFrame af = augment_frame(frame, rot);
-    Image8 valid = af.valid[0];
-    for (size_t k = 1; k < af.valid.size(); ++k)
-      for (size_t i = 0; i < valid.data.size(); ++i) valid.data[i] = std::min(valid.data[i], af.valid[k].data[i]);
-    const auto regions = pixel_regions(af.masks, &valid);
-    size_t usable = 0;
-    for (const auto& r : regions) usable += r.size();
-    if (usable < static_cast<size_t>(c.rays) / 4) continue;
-    batch = draw_pixels(af.rgb, af.masks, regions, c.rays, rng_);
-    cameras = af.cameras;
-    if (graph_->target_nerf_rgb.valid()) nerf_images = std::move(af.images);
-    drawn = true;
-  }
-  if (!drawn && joint) {
-    augmented = false;
-    batch = draw_pixels(frame.rgb, frame.masks, regions_[fi], c.rays, rng_);
-  } else if (!drawn) {
-    const auto& r = regions_[fi];
-    std::vector<std::vector<uint32_t>> background_only(r.size());
-    background_only[0] = r[0];
-    batch = draw_pixels(frame.rgb, frame.masks, background_only, c.rays, rng_);
-  }
+  detail::StepBatch drawn = detail::draw_step_batch(scene_, regions_, c, joint, phase_step, N,
+                                                   graph_->target_nerf_rgb.valid(), rng_);
+  const Frame& frame = scene_.frames[drawn.frame];
+  const bool augmented = drawn.augmented;
+  PixelBatch& batch = drawn.pixels;
+  const std::vector<Camera>& cameras = drawn.cameras;
 
   if (ranks() > 1) {  // this rank's share of the step's rays
-    const RaySlice slice = ray_slice();
-    const size_t n = R / ranks(), a = slice.first_ray;
-    PixelBatch mine;
-    mine.pixels.assign(batch.pixels.begin() + 2 * a, batch.pixels.begin() + 2 * (a + n));
-    mine.rgb.assign(batch.rgb.begin() + 3 * a, batch.rgb.begin() + 3 * (a + n));
-    for (size_t k = 0; k < batch.masks.size() / R; ++k)
-      mine.masks.insert(mine.masks.end(), batch.masks.begin() + k * R + a, batch.masks.begin() + k * R + a + n);
-    mine.region_rays = batch.region_rays;
-    batch = std::move(mine);
+    const size_t n = R / ranks();
+    batch = detail::slice_batch(batch, R, ray_slice().first_ray, n);
     R = n;
   }
   graph_->draws->value = static_cast<uint64_t>(step_);
@@ -266,29 +173,12 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   exec_->set(graph_->cameras, camera_rows(cameras));
   exec_->set(graph_->target_rgb, batch.rgb);
   if (graph_->target_depth.valid()) {
-    // Minus the disparity: the NDC depth the renderer gives grows as disparity falls. A
-    // warped (augmented) view has no disparity map, so its rays carry no depth term.
-    std::vector<float> target(R, 0.0f), valid(R, augmented ? 0.0f : 1.0f);
-    if (!augmented)
-      for (size_t r = 0; r < R; ++r) {
-        const size_t x = static_cast<size_t>(batch.pixels[2 * r]);
-        const size_t y = static_cast<size_t>(batch.pixels[2 * r + 1]);
-        target[r] = -frame.disparity.data[y * static_cast<size_t>(frame.disparity.width) + x];
-      }
-    exec_->set(graph_->target_depth, target);
-    exec_->set(graph_->depth_valid, valid);
+    const detail::DepthTargets d = detail::depth_targets(frame, batch, R, augmented);
+    exec_->set(graph_->target_depth, d.target);
+    exec_->set(graph_->depth_valid, d.valid);
   }
-  if (graph_->target_nerf_rgb.valid()) {
-    std::vector<float> target(static_cast<size_t>(N) * R * 3);
-    for (size_t n = 0; n < static_cast<size_t>(N); ++n) {
-      const Image8& img = nerf_images.empty() ? frame.rgb : nerf_images[n];
-      for (size_t r = 0; r < R; ++r) {
-        const int x = static_cast<int>(batch.pixels[2 * r]), y = static_cast<int>(batch.pixels[2 * r + 1]);
-        for (int k = 0; k < 3; ++k) target[(n * R + r) * 3 + k] = img.at(x, y, k) / 255.0f;
-      }
-    }
-    exec_->set(graph_->target_nerf_rgb, target);
-  }
+  if (graph_->target_nerf_rgb.valid())
+    exec_->set(graph_->target_nerf_rgb, detail::nerf_rgb_targets(frame, drawn.nerf_images, batch, N, R));
   if (joint) {
     exec_->set(graph_->target_masks, batch.masks);
     exec_->set(graph_->times, std::vector<float>(static_cast<size_t>(scene_.num_objects), static_cast<float>(frame.time)));
@@ -296,7 +186,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   exec_->forward();
   exec_->backward();
   if (ranks() > 1) reduce_gradients();
-  const float lr = c.lr * static_cast<float>(std::pow(c.lr_decay, static_cast<double>(phase_step) / c.lr_decay_steps));
+  const float lr = ExponentialDecay{c.lr, c.lr_decay, static_cast<double>(c.lr_decay_steps)}(phase_step);
   adam_->step(exec_->parameter_arena(), exec_->gradient_arena(), lr);
   ++step_;
   maybe_update_occupancy(phase_step + 1);
@@ -362,7 +252,7 @@ void Trainer::run(const std::function<void(const TrainProgress&)>& progress, lon
       p.rays_per_s = config_.rays / per_step;
       p.seconds = std::chrono::duration<double>(now - start).count();
       p.eta_seconds = std::min(pretrain_left, end - step_) * pretrain_step_s + joint_left * joint_estimate;
-      metrics << metrics_record(p) << "\n";
+      metrics << detail::metrics_record(p) << "\n";
       metrics.flush();
       if (!std::isfinite(p.loss))
         throw Error("training diverged at step " + std::to_string(p.step) +
@@ -437,7 +327,7 @@ void Trainer::resume() {
       throw mismatch(e.what());
     }
   }
-  if (writes_files()) truncate_metrics(run_.metrics_path(), step_);
+  if (writes_files()) detail::truncate_metrics(run_.metrics_path(), step_);
   write_config();
 }
 

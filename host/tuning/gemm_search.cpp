@@ -9,7 +9,7 @@
 #include <random>
 #include <sstream>
 
-#include "nova/gemm_tuning.hpp"
+#include "nova/tuning/gemm_tuning.hpp"
 
 namespace nova {
 namespace {

@@ -1,6 +1,6 @@
 // GEMM tuning: configurations and shape classes, the per-device cache of measured winners
 // (`nova tune`), and the winner a GEMM runs with.
-#include "nova/gemm_tuning.hpp"
+#include "nova/tuning/gemm_tuning.hpp"
 
 #include <clblast.h>
 

@@ -1,5 +1,5 @@
 // The kernel tuning database: each family's parameters as -D defines, and the per-device table.
-#include "nova/tuning.hpp"
+#include "nova/tuning/tuning.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -17,7 +17,7 @@
 //   compose_spec.hpp says; without pivot= the renderer decides it.
 #include <string>
 
-#include "nova/compose_spec.hpp"
+#include "nova/model/compose_spec.hpp"
 
 namespace nova {
 

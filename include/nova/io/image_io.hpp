@@ -3,7 +3,7 @@
 // file and the problem. Implemented with OpenCV in nova_io; no OpenCV types here.
 #include <string>
 
-#include "nova/scene.hpp"
+#include "nova/model/scene.hpp"
 
 namespace nova {
 

@@ -1,0 +1,98 @@
+// Mean squared error over all elements, as a deterministic two-stage sum.
+#include "nova/graph/executor.hpp"
+#include "nova/loss/terms.hpp"
+#include "ops/tensor/op_util.hpp"
+
+namespace nova {
+namespace {
+
+class MseOp final : public Op {
+ public:
+  explicit MseOp(size_t n) : n_(n), parts_(detail::reduction_parts(n)) {}
+  std::string type() const override { return "mse"; }
+
+  void forward(ExecContext& ctx) override {
+    const unsigned n = detail::u32(n_, "mse size"), parts = detail::u32(parts_, "parts");
+    ctx.launch("loss", "sq_err_partial")
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.workspace()).arg(n).arg(parts)
+        .run(parts_);
+    ctx.launch("loss", "sum_finish")
+        .arg(ctx.workspace()).arg(ctx.out(0)).arg(parts).arg(1.0f / static_cast<float>(n_))
+        .run(1);
+  }
+
+  void backward(ExecContext& ctx) override {
+    cl_mem gl = ctx.grad_out(0);
+    if (!gl) return;
+    const float scale = 2.0f / static_cast<float>(n_);
+    for (size_t i = 0; i < 2; ++i)
+      if (cl_mem g = ctx.grad_in(i))
+        ctx.launch("loss", "sq_err_backward")
+            .arg(ctx.in(0)).arg(ctx.in(1)).arg(gl).arg(g).arg(detail::u32(n_, "mse size"))
+            .arg(i == 0 ? scale : -scale).arg(static_cast<int>(ctx.accumulate_in(i)))
+            .run(n_);
+  }
+
+  std::vector<TensorId> saved_for_backward() const override { return inputs(); }
+  size_t workspace_bytes(Runtime&, Pass pass) const override {
+    return pass == Pass::Forward ? parts_ * sizeof(float) : 0;
+  }
+
+ private:
+  size_t n_, parts_;
+};
+
+class WeightedSumOp final : public Op {
+ public:
+  explicit WeightedSumOp(std::vector<float> w) : w_(std::move(w)) {}
+  std::string type() const override { return "weighted_sum"; }
+
+  void forward(ExecContext& ctx) override {
+    for (size_t i = 0; i < w_.size(); ++i)
+      ctx.launch("loss", "scalar_axpy").arg(ctx.in(i)).arg(ctx.out(0)).arg(w_[i])
+          .arg(static_cast<int>(i > 0)).run(1);
+  }
+
+  void backward(ExecContext& ctx) override {
+    cl_mem gl = ctx.grad_out(0);
+    if (!gl) return;
+    for (size_t i = 0; i < w_.size(); ++i)
+      if (cl_mem g = ctx.grad_in(i))
+        ctx.launch("loss", "scalar_axpy").arg(gl).arg(g).arg(w_[i])
+            .arg(static_cast<int>(ctx.accumulate_in(i))).run(1);
+  }
+
+  std::vector<TensorId> saved_for_backward() const override { return {}; }
+
+ private:
+  std::vector<float> w_;
+};
+
+}  // namespace
+
+Tensor mse(Tensor pred, Tensor target) {
+  if (!(pred.shape() == target.shape()))
+    throw Error("mse: prediction " + pred.shape().str() + " and target " + target.shape().str() +
+                    " differ",
+                kExitInternal);
+  Graph& g = *pred.graph;
+  Tensor y = g.activation(pred.info().name + ".mse", Shape{1});
+  g.add(std::make_unique<MseOp>(pred.shape().numel()), {pred, target}, {y});
+  return y;
+}
+
+Tensor weighted_sum(const std::vector<Tensor>& terms, const std::vector<float>& weights) {
+  if (terms.empty() || terms.size() != weights.size())
+    throw Error("weighted_sum: " + std::to_string(terms.size()) + " terms and " +
+                    std::to_string(weights.size()) + " weights",
+                kExitInternal);
+  for (const Tensor& t : terms)
+    if (t.shape().numel() != 1)
+      throw Error("weighted_sum: term '" + t.info().name + "' is not a scalar", kExitInternal);
+  Graph& g = *terms[0].graph;
+  Tensor y = g.activation("loss", Shape{1});
+  g.add(std::make_unique<WeightedSumOp>(weights), terms, {y});
+  return y;
+}
+
+}  // namespace nova

@@ -1,0 +1,85 @@
+// Concatenation along the last dimension (the skip connection that re-feeds the encoded
+// input before layer 5); its backward splits the gradient into the parts.
+#include "nova/graph/executor.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
+#include "ops/tensor/concat_op.hpp"
+#include "ops/tensor/op_util.hpp"
+
+namespace nova {
+namespace {
+
+class ConcatOp final : public Op {
+ public:
+  ConcatOp(size_t rows, std::vector<size_t> widths, std::string type)
+      : rows_(rows), widths_(std::move(widths)), type_(std::move(type)) {
+    for (size_t w : widths_) total_ += w;
+  }
+  std::string type() const override { return type_; }
+
+  void forward(ExecContext& ctx) override {
+    const size_t rows = ctx.out_rows(0, rows_);
+    if (rows == 0) return;
+    size_t offset = 0;
+    for (size_t i = 0; i < widths_.size(); ++i) {
+      ctx.launch("tensor", "copy_cols")
+          .arg(ctx.in(i)).arg(ctx.out(0)).arg(detail::u32(rows, "rows"))
+          .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
+          .arg(detail::u32(offset, "offset"))
+          .run2(widths_[i], rows);
+      offset += widths_[i];
+    }
+  }
+
+  void backward(ExecContext& ctx) override {
+    cl_mem dy = ctx.grad_out(0);
+    const size_t rows = ctx.out_rows(0, rows_);
+    size_t offset = 0;
+    for (size_t i = 0; i < widths_.size(); ++i) {
+      if (cl_mem dx = ctx.grad_in(i); dx && dy && rows > 0)
+        ctx.launch("tensor", "copy_cols_back")
+            .arg(dy).arg(dx).arg(detail::u32(rows, "rows"))
+            .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
+            .arg(detail::u32(offset, "offset")).arg(static_cast<int>(ctx.accumulate_in(i)))
+            .run2(widths_[i], rows);
+      offset += widths_[i];
+    }
+  }
+
+  // The backward only moves gradients: no values are needed.
+  std::vector<TensorId> saved_for_backward() const override { return {}; }
+
+ private:
+  size_t rows_;
+  std::vector<size_t> widths_;
+  std::string type_;
+  size_t total_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Op> make_column_concat(size_t rows, std::vector<size_t> widths, std::string type) {
+  return std::make_unique<ConcatOp>(rows, std::move(widths), std::move(type));
+}
+
+Tensor concat(const std::vector<Tensor>& parts) {
+  if (parts.empty()) throw Error("concat of nothing", kExitInternal);
+  const Shape first = parts[0].shape();  // a copy: g.activation below may move the graph's tensors
+  std::vector<size_t> widths;
+  std::string name = parts[0].info().name;
+  for (const Tensor& t : parts) {
+    Shape a = t.shape(), b = first;
+    a.dims.back() = b.dims.back() = 0;
+    if (!(a == b) || t.graph != parts[0].graph)
+      throw Error("concat: " + t.shape().str() + " does not fit " + first.str(), kExitInternal);
+    widths.push_back(t.shape().cols());
+  }
+  Shape out = first;
+  out.dims.back() = 0;
+  for (size_t w : widths) out.dims.back() += w;
+  Graph& g = *parts[0].graph;
+  Tensor y = g.activation(name + ".cat", out);
+  g.add(make_column_concat(first.rows(), widths, "concat"), parts, {y});
+  return y;
+}
+
+}  // namespace nova

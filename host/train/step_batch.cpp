@@ -1,0 +1,102 @@
+#include "train/step_batch.hpp"
+
+#include <algorithm>
+#include <optional>
+
+#include "nova/train/augment.hpp"
+
+namespace nova::detail {
+
+StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std::vector<uint32_t>>>& regions,
+                          const TrainConfig& c, bool joint, long phase_step, int nerfs, bool want_nerf_images,
+                          std::mt19937& rng) {
+  const size_t F = scene.frames.size();
+  size_t fi = static_cast<size_t>(uniform01(rng) * static_cast<float>(F)) % F;
+  // Pretraining only sees background pixels: skip frames that have none.
+  if (!joint)
+    for (size_t tries = 0; regions[fi][0].empty() && tries < F; ++tries) fi = (fi + 1) % F;
+  const Frame& frame = scene.frames[fi];
+
+  bool augmented = joint && c.augment && phase_step >= c.augment_start &&
+                         (phase_step - c.augment_start) % c.augment_every == 0;
+  PixelBatch batch;
+  std::vector<Camera> cameras(static_cast<size_t>(nerfs), frame.camera);
+  // The image each NeRF's own target colour comes from (the per-NeRF RGB loss under the
+  // reference conventions): the frame, or on an augmented step each object's warped view.
+  std::vector<Image8> nerf_images;
+  bool drawn = false;
+  // Two objects turned in opposite directions can leave no pixel that both warps cover
+  // (a 20 degree turn shifts a 160 px wide image by ~64 px): draw new turns a few times,
+  // then fall back to the original view.
+  for (int attempt = 0; augmented && !drawn && attempt < 4; ++attempt) {
+    std::vector<std::optional<CameraRotation>> rot;
+    for (int k = 0; k < scene.num_objects; ++k) rot.push_back(random_rotation(rng, c.augment_degrees));
+    AugmentedFrame af = augment_frame(frame, rot);
+    Image8 valid = af.valid[0];
+    for (size_t k = 1; k < af.valid.size(); ++k)
+      for (size_t i = 0; i < valid.data.size(); ++i) valid.data[i] = std::min(valid.data[i], af.valid[k].data[i]);
+    const auto warped = pixel_regions(af.masks, &valid);
+    size_t usable = 0;
+    for (const auto& r : warped) usable += r.size();
+    if (usable < static_cast<size_t>(c.rays) / 4) continue;
+    batch = draw_pixels(af.rgb, af.masks, warped, c.rays, rng);
+    cameras = af.cameras;
+    if (want_nerf_images) nerf_images = std::move(af.images);
+    drawn = true;
+  }
+  if (!drawn && joint) {
+    augmented = false;
+    batch = draw_pixels(frame.rgb, frame.masks, regions[fi], c.rays, rng);
+  } else if (!drawn) {
+    const auto& r = regions[fi];
+    std::vector<std::vector<uint32_t>> background_only(r.size());
+    background_only[0] = r[0];
+    batch = draw_pixels(frame.rgb, frame.masks, background_only, c.rays, rng);
+  }
+
+  StepBatch out;
+  out.frame = fi;
+  out.augmented = augmented;
+  out.pixels = std::move(batch);
+  out.cameras = std::move(cameras);
+  out.nerf_images = std::move(nerf_images);
+  return out;
+}
+
+PixelBatch slice_batch(const PixelBatch& batch, size_t R, size_t a, size_t n) {
+  PixelBatch mine;
+  mine.pixels.assign(batch.pixels.begin() + 2 * a, batch.pixels.begin() + 2 * (a + n));
+  mine.rgb.assign(batch.rgb.begin() + 3 * a, batch.rgb.begin() + 3 * (a + n));
+  for (size_t k = 0; k < batch.masks.size() / R; ++k)
+    mine.masks.insert(mine.masks.end(), batch.masks.begin() + k * R + a, batch.masks.begin() + k * R + a + n);
+  mine.region_rays = batch.region_rays;
+  return mine;
+}
+
+DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t R, bool augmented) {
+  // A warped (augmented) view has no disparity map, so its rays carry no depth term.
+  DepthTargets d{std::vector<float>(R, 0.0f), std::vector<float>(R, augmented ? 0.0f : 1.0f)};
+  if (!augmented)
+    for (size_t r = 0; r < R; ++r) {
+      const size_t x = static_cast<size_t>(batch.pixels[2 * r]);
+      const size_t y = static_cast<size_t>(batch.pixels[2 * r + 1]);
+      d.target[r] = -frame.disparity.data[y * static_cast<size_t>(frame.disparity.width) + x];
+    }
+  return d;
+}
+
+std::vector<float> nerf_rgb_targets(const Frame& frame, const std::vector<Image8>& nerf_images,
+                                    const PixelBatch& batch, int nerfs, size_t R) {
+  const size_t N = static_cast<size_t>(nerfs);
+  std::vector<float> target(N * R * 3);
+  for (size_t n = 0; n < N; ++n) {
+    const Image8& img = nerf_images.empty() ? frame.rgb : nerf_images[n];
+    for (size_t r = 0; r < R; ++r) {
+      const int x = static_cast<int>(batch.pixels[2 * r]), y = static_cast<int>(batch.pixels[2 * r + 1]);
+      for (int k = 0; k < 3; ++k) target[(n * R + r) * 3 + k] = img.at(x, y, k) / 255.0f;
+    }
+  }
+  return target;
+}
+
+}  // namespace nova::detail

@@ -1,0 +1,47 @@
+#pragma once
+// What one training step trains on: a frame, the pixels drawn from it (or from a view of it
+// with the objects turned: novel-view augmentation) and the per-ray targets the step graph
+// takes besides the pixels' colours.
+#include <cstddef>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "nova/model/scene.hpp"
+#include "nova/train/pixel_batch.hpp"
+#include "nova/train/train_config.hpp"
+
+namespace nova::detail {
+
+struct StepBatch {
+  size_t frame = 0;  // index into Scene::frames
+  bool augmented = false;
+  PixelBatch pixels;
+  std::vector<Camera> cameras;      // one per NeRF
+  std::vector<Image8> nerf_images;  // each NeRF's target image when augmented; empty: the frame
+};
+
+// Draws the step's frame and `config.rays` pixels: pretraining from background pixels only,
+// joint training from every region, augmented on the steps the configuration says.
+// `regions` holds each frame's pixel regions (pixel_regions). `nerf_images`: keep each NeRF's
+// warped view (the reference's per-NeRF RGB loss needs them).
+StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std::vector<uint32_t>>>& regions,
+                          const TrainConfig& config, bool joint, long phase_step, int nerfs, bool nerf_images,
+                          std::mt19937& rng);
+
+// Rays [first, first + count) of a batch of `rays` rays: one rank's share of the step.
+PixelBatch slice_batch(const PixelBatch& batch, size_t rays, size_t first, size_t count);
+
+// The depth term's targets of the batch's `rays` rays: minus the frame's disparity (the NDC
+// depth the renderer gives grows as disparity falls), and which rays carry the term.
+struct DepthTargets {
+  std::vector<float> target, valid;
+};
+DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t rays, bool augmented);
+
+// Each NeRF's target colour of every ray [nerfs, rays, 3]: from its own warped view, or the
+// frame where `nerf_images` is empty.
+std::vector<float> nerf_rgb_targets(const Frame& frame, const std::vector<Image8>& nerf_images,
+                                    const PixelBatch& batch, int nerfs, size_t rays);
+
+}  // namespace nova::detail

@@ -1,0 +1,81 @@
+#pragma once
+// The two NeRF fields of NOVA as graph builders: the static background NeRF and the
+// time-conditioned object NeRFs (one per object, run together as batched GEMMs). Both emit
+// the raw rows render_composite reads: [rgb(3), sigma, blend], pre-activation.
+//
+// The input encoding is the paper's positional encoding (PE) or a multiresolution hash grid
+// (hash_grid.hpp; 3-D for the static NeRF, 4-D xyzt for the objects) in its place.
+//
+//   static:  [PE_L(xyz)] -> trunk (depth x width, input re-fed after layer `skip`) -> feature
+//            feature -> sigma, blend;  [feature, PE_Ld(viewdir)] -> width/2 ReLU -> rgb
+//            (with view_dirs off the rgb head reads the feature alone)
+//   object:  [PE_L(xyzt)] -> trunk -> rgb, sigma, blend (view-independent, as the reference's
+//            dynamic NeRF); with a rigid motion [PE_L(xyz)] of the canonical position alone
+// Parameter names: "static.*" and "objects.*"; object parameters carry a leading object
+// dimension [K, ...] when K > 1, so one object's weights are a slice of them.
+#include <string>
+#include "nova/graph/graph.hpp"
+#include "nova/ops/encoding/hash_encoding.hpp"
+#include "nova/sampling/rigid_motion.hpp"
+
+namespace nova {
+
+enum class Encoding { Frequency, HashGrid };
+const char* encoding_name(Encoding e);  // "frequency", "hashgrid"
+
+// A time cell shared by about three neighbouring frames ties each object NeRF to three
+// viewpoints of a monocular video: on the default synthetic scene (24 frames) 8 cells gave
+// 25.36 dB camera-0 PSNR against 24.03 with a cell per frame and more at fine levels, on
+// nvidia_balloon1 (12 frames, novel times) 4 cells 18.59 dB against 17.01 (docs/accuracy.md).
+inline constexpr double kFramesPerTimeCell = 3.0;
+
+struct FieldConfig {
+  Encoding encoding = Encoding::Frequency;
+  // With Encoding::HashGrid. hash.bound <= 0 (the default): resolved from the scene by
+  // scene_field, the training rays' extent in NDC, the cameras' extent otherwise; HashGridConfig's own bound of 1 had
+  // clamped metric scenes (Blender, D-NeRF) to [-1, 1]^3 (dnerf_lego_tiny 18.51 dB; from the
+  // scene 20.47). A field built from an unresolved config is refused by the encoding.
+  HashGridConfig hash{.bound = 0.0f};
+  // hash.time_max_resolution resolved from the scene's frames, about kFramesPerTimeCell
+  // frames per cell (scene_field in nova_graphs.hpp); false: hash.time_max_resolution as set.
+  bool hash_time_auto = false;
+  // In NDC, hash.bound <= 0 resolves to 1, the reference camera's frustum [-1, 1]^3; with
+  // true, x and y instead take the half-sizes of the box that holds every training ray
+  // (RayGeometry::box: more than 1 where the camera moves sideways), z stays [-1, 1]. The
+  // unit box clamps what moved cameras see beyond it (streaks at the image edge).
+  bool ndc_box_from_rays = false;
+  // Half-size of the cube the occupancy grids cover, resolved by scene_field (0 until then):
+  // the hash grid's box, or with hash.extend every training ray's extent, so that what the
+  // extended levels encode beyond the box has cells of its own to be found occupied in.
+  float occupancy_bound = 0.0f;
+  // Finest cells per dimension of the object NeRFs' hash grid (0: hash.max_resolution). An
+  // object is seen from one camera per time, so fine levels it cannot constrain fill with
+  // hash-collision noise when it is viewed from elsewhere.
+  int object_max_resolution = 0;
+  // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
+  // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
+  ObjectMotion motion = ObjectMotion::None;
+  int depth = 8;
+  int width = 256;
+  int skip = 4;        // 0-based trunk layer whose output gets the encoded input appended
+  int pos_freqs = 10;  // L of the positional encoding of xyz (and t for objects)
+  int dir_freqs = 4;   // L of the view-direction encoding
+  bool view_dirs = true;  // static colour depends on the view direction
+};
+
+// positions [M, 3], viewdirs [M, 3] (unused without view_dirs) -> raw [M, 5].
+Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& config);
+
+// The object NeRFs' hash grid: `hash` with object_max_resolution in place of its finest level.
+HashGridConfig object_hash_config(const FieldConfig& config);
+
+// positions [B, M, 3] (or [M, 3] for B = 1), times of the same shape with 1 column -> raw
+// [B, M, 5] (or [M, 5]). B object networks with independent weights. With a rigid motion the
+// positions are canonical and the times are not read.
+Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& config);
+
+// Parameter name prefixes, for checkpoints and the inference renderer.
+inline const std::string kStaticPrefix = "static.";
+inline const std::string kObjectPrefix = "objects.";
+
+}  // namespace nova

@@ -1,0 +1,24 @@
+#pragma once
+// Ops that move rows and columns of tensors; shapes are row-major, the last dimension the
+// feature dimension.
+#include <cstddef>
+#include <vector>
+
+#include "nova/graph/graph.hpp"
+
+namespace nova {
+
+// Concatenation along the last dimension; all other dimensions must match.
+Tensor concat(const std::vector<Tensor>& parts);
+
+// y = x; the backward passes x's gradient scaled per group of rows: dx[r * G + j] = dy[r * G + j]
+// gate[gate_row, r] for x [R * G, C] and gate [rows, R] (data, no gradient). Deliberately not
+// the derivative of the forward: a gate of 0 stops what flows through those rows, 1 is the
+// identity. Joint training gates the static NeRF's samples with each ray's background mask.
+Tensor gradient_gate(Tensor x, Tensor gate, size_t gate_row = 0);
+
+// x [B, C] (data) -> [B, rows, C] ([rows, C] for B = 1): batch b's row in each of its rows.
+// Spreads a per-group constant (an object's time) over its samples without a host upload.
+Tensor repeat_rows(Tensor x, size_t rows);
+
+}  // namespace nova

@@ -1,0 +1,47 @@
+#pragma once
+// The rigid motion of one object between two frames of the video, from the frames alone:
+// the first frame's view of the object (its masked pixels, placed in the scene at their
+// depth) is moved until it matches the second frame's colours, mask and depth. This is how
+// a rigid object's turn is found before training (a trajectory learned from no turn at all
+// does not find a turn of tens of degrees through the hash grid's local gradients); it needs
+// no optical flow, only what nova is given.
+#include <vector>
+
+#include "nova/sampling/rigid_motion.hpp"
+#include "nova/model/scene.hpp"
+
+namespace nova {
+
+// One frame's view of one object. Depth is the camera-space depth (distance along the
+// view axis, camera.hpp's -z) of every pixel, <= 0 or not finite where unknown.
+struct ObjectView {
+  const Camera* camera = nullptr;
+  const Image8* rgb = nullptr;
+  const Image8* mask = nullptr;  // the object's mask (>= 128 inside)
+  const ImageF* depth = nullptr;
+};
+
+struct AlignmentOptions {
+  // Coarse to fine: the images are blurred by each sigma (pixels, at 160 px width; scaled
+  // with the image) in turn, so that the first levels see a turn of several pixels.
+  std::vector<double> blur_px{2.0, 1.0, 0.5};
+  int iterations = 10;          // Gauss-Newton steps per level
+  int max_points = 1200;        // of the first view's pixels
+  double depth_weight = 1.0;    // a relative depth error of 10 % weighs as a colour error of 0.1
+  double mask_weight = 0.5;     // a point outside the second mask weighs as a colour error of 0.5
+  double turn_prior = 1e-3;     // damping towards no turn (per radian squared), for textureless objects
+};
+
+struct ObjectAlignment {
+  Mat34 motion{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};  // world -> world, view a's object to view b's
+  double turn = 0;                                   // its rotation angle (radians)
+  int points = 0;                                    // of view a that were aligned
+  double residual = 0;                               // mean squared residual at the end
+};
+
+// Aligns view a's object to view b. The motion turns about the centroid of a's points and then
+// translates; `translation` is the starting translation (e.g. the shift of the masks' anchors).
+ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec3& translation,
+                             const AlignmentOptions& options = {});
+
+}  // namespace nova
