@@ -12,11 +12,11 @@
 
 #include "bench.hpp"
 #include "options.hpp"
-#include "nova/camera.hpp"
-#include "nova/disparity_fit.hpp"
-#include "nova/io/scene_io.hpp"
-#include "nova/io/synth.hpp"
-#include "nova/motion_alignment.hpp"
+#include "nova/sampling/camera.hpp"
+#include "nova/train/disparity_fit.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/data/synth.hpp"
+#include "nova/train/motion_alignment.hpp"
 
 namespace nova::bench {
 namespace {
