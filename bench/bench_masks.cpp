@@ -116,6 +116,7 @@ int masks(const Args& args) {
                          {"min-track-frames", text(opt.min_track_frames)},
                          {"global-fit", "off"},
                          {"out", ""},
+                         {"grabcut-band", text(opt.grabcut_band)},
                          {"no-grabcut", "off"}});
   if (o.help()) {
     std::cout << o.usage("masks") << "\n--seeds: family seeds; --scene DIR [--truth DIR] [--factor F]: a NOVA "
@@ -137,6 +138,7 @@ int masks(const Args& args) {
   opt.min_track_frames = std::stod(o.str("min-track-frames"));
   opt.per_frame_fit = !o.flag("global-fit");
   opt.grabcut = !o.flag("no-grabcut");
+  opt.grabcut_band = std::stod(o.str("grabcut-band"));
   std::vector<Score> scores;
   ScratchDir scratch("masks");
   for (long seed : o.integers("seeds")) {

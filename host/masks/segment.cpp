@@ -133,7 +133,10 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
 
   // GrabCut inside a band around the region: sure background beyond it, probable background in
   // it, probable foreground in the region, sure foreground where the score is high well inside.
-  const int band = std::max(6, int(0.11 * std::min(score.cols, score.rows)));
+  // The band is wide (options.grabcut_band, 11 % of the smaller side) so that an object's smooth
+  // middle between two moving ends (Balloon1's balloon) can join them; docs/masks.md has the
+  // measurements the width was chosen by.
+  const int band = std::max(6, int(options.grabcut_band * std::min(score.cols, score.rows)));
   cv::Mat near_region;
   cv::dilate(region, near_region, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * band + 1, 2 * band + 1)));
   cv::Mat inner;
