@@ -62,18 +62,30 @@ Score score(const std::string& name, const Scene& scene, const std::vector<Image
   s.true_objects = true_objects;
   if (truth.size() != scene.frames.size()) throw Error(name + ": " + std::to_string(truth.size()) + " true masks for " +
                                                        std::to_string(scene.frames.size()) + " frames");
-  std::string per;
+  std::string per, errors;
   for (size_t i = 0; i < truth.size(); ++i) {
     std::vector<Image8> frame_masks;
     for (const auto& k : m.masks) frame_masks.push_back(k[i]);
-    const double iou = mask_iou(objects_union(frame_masks), truth[i]);
+    const Image8 made = objects_union(frame_masks);
+    const double iou = mask_iou(made, truth[i]);
+    // Which error it is: true pixels missed and false pixels taken, each as a fraction of the truth.
+    size_t missed = 0, extra = 0, real = 0;
+    for (size_t p = 0; p < made.data.size(); ++p) {
+      real += truth[i].data[p] != 0;
+      missed += truth[i].data[p] && !made.data[p];
+      extra += !truth[i].data[p] && made.data[p];
+    }
+    char e[32];
+    std::snprintf(e, sizeof e, " %.2f/%.2f", double(missed) / double(std::max<size_t>(real, 1)),
+                  double(extra) / double(std::max<size_t>(real, 1)));
+    errors += e;
     s.mean += iou / double(truth.size());
     s.worst = std::min(s.worst, iou);
     char b[16];
     std::snprintf(b, sizeof b, " %.2f", iou);
     per += b;
   }
-  std::cout << name << ": per frame" << per << "\n";
+  std::cout << name << ": per frame" << per << "\n" << name << ": missed/extra" << errors << "\n";
   return s;
 }
 
@@ -104,6 +116,7 @@ int masks(const Args& args) {
                          {"min-track-frames", text(opt.min_track_frames)},
                          {"global-fit", "off"},
                          {"out", ""},
+                         {"grabcut-band", text(opt.grabcut_band)},
                          {"no-grabcut", "off"}});
   if (o.help()) {
     std::cout << o.usage("masks") << "\n--seeds: family seeds; --scene DIR [--truth DIR] [--factor F]: a NOVA "
@@ -125,6 +138,7 @@ int masks(const Args& args) {
   opt.min_track_frames = std::stod(o.str("min-track-frames"));
   opt.per_frame_fit = !o.flag("global-fit");
   opt.grabcut = !o.flag("no-grabcut");
+  opt.grabcut_band = std::stod(o.str("grabcut-band"));
   std::vector<Score> scores;
   ScratchDir scratch("masks");
   for (long seed : o.integers("seeds")) {

@@ -1,6 +1,6 @@
 // nova masks (include/nova/io/motion_masks.hpp): the reprojection against a float64
 // reference, the masks of the tiny synthetic scene against its exact masks, the growth over
-// the depth's surfaces on a made-up depth, and bad input
+// the depth's surfaces and the hole filling on made-up depths, and bad input
 // (missing disparity or poses, a static video, nothing left behind on failure).
 #include <boost/test/unit_test.hpp>
 #include <cmath>
@@ -137,6 +137,40 @@ BOOST_AUTO_TEST_CASE(growth_takes_the_seeds_surface_and_not_the_wall) {
   // Both at once: each part decides alone.
   grown = nova::masks::grow_on_depth(seed | wall_seed, w, 0.005, 6.0);
   BOOST_TEST(cv::countNonZero(grown != (want | wall_seed)) == 0);
+}
+
+// Growth does not run down a floor towards the camera: a flat 20 x 20 part at 0.8 stands on a
+// floor whose inverse depth rises 0.3 % per row below it (under the 0.5 % step). The floor is
+// taken while no nearer than the part's 90th percentile plus 5 % (0.84): rows 30-45 (0.8 x
+// 1.003^16 = 0.8392), not row 46 (0.8417) nor the 13 rows below it.
+BOOST_AUTO_TEST_CASE(growth_stops_on_a_floor_nearer_than_the_part) {
+  cv::Mat w(60, 60, CV_32F, cv::Scalar(0.5));
+  const cv::Rect part(20, 10, 20, 20);
+  w(part).setTo(0.8);
+  for (int y = 30; y < 60; ++y) w(cv::Rect(20, y, 20, 1)).setTo(0.8 * std::pow(1.003, y - 29));
+  cv::Mat seed(w.size(), CV_8U, cv::Scalar(0));
+  seed(part).setTo(255);
+  const cv::Mat grown = nova::masks::grow_on_depth(seed, w, 0.005, 6.0);
+  cv::Mat want = seed.clone();
+  want(cv::Rect(20, 30, 20, 16)).setTo(255);
+  BOOST_TEST(cv::countNonZero(grown != want) == 0);
+}
+
+// Holes: a ring at inverse depth 0.8 around a 10 x 10 hole. The background seen through it
+// (0.5, far behind) stays open; a hole at the ring's own depth (a textureless middle) is filled,
+// and so is any hole without a depth to judge by.
+BOOST_AUTO_TEST_CASE(holes_behind_the_region_stay_open) {
+  cv::Mat w(60, 60, CV_32F, cv::Scalar(0.5));
+  cv::Mat ring(w.size(), CV_8U, cv::Scalar(0));
+  ring(cv::Rect(15, 15, 30, 30)).setTo(255);
+  ring(cv::Rect(25, 25, 10, 10)).setTo(0);
+  w.setTo(0.8, ring);
+  cv::Mat filled = ring.clone();
+  filled(cv::Rect(25, 25, 10, 10)).setTo(255);
+  BOOST_TEST(cv::countNonZero(nova::masks::clean_region(ring, 4, w) != ring) == 0);
+  BOOST_TEST(cv::countNonZero(nova::masks::clean_region(ring, 4) != filled) == 0);
+  w(cv::Rect(25, 25, 10, 10)).setTo(0.79);  // 1 % behind: within the 5 %, the object's own middle
+  BOOST_TEST(cv::countNonZero(nova::masks::clean_region(ring, 4, w) != filled) == 0);
 }
 
 BOOST_AUTO_TEST_CASE(missing_disparity_or_poses_is_named_and_nothing_is_written) {

@@ -68,8 +68,10 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
 // Each connected part of `region` grown over pixels whose inverse depth changes by less than
 // `step` (relative) from pixel to pixel, unless it would grow past `max_growth` times its area.
 cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step, double max_growth);
-// Drops connected regions under `min_pixels` and fills enclosed holes (CV_8U, 255 inside).
-cv::Mat clean_region(const cv::Mat& region, int min_pixels);
+// Drops connected regions under `min_pixels` and fills enclosed holes (CV_8U, 255 inside); with
+// `inv_depth`, not the holes whose depth lies behind the region around them (background seen
+// through the object).
+cv::Mat clean_region(const cv::Mat& region, int min_pixels, const cv::Mat& inv_depth = cv::Mat());
 
 // Splits the moving regions of all frames into objects tracked through time: [object][frame],
 // CV_8U 255 inside; empty when nothing persists.

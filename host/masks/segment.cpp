@@ -30,7 +30,7 @@ double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptio
   return t;
 }
 
-cv::Mat clean_region(const cv::Mat& region, int min_pixels) {
+cv::Mat clean_region(const cv::Mat& region, int min_pixels, const cv::Mat& inv_depth) {
   cv::Mat labels, stats, centroids;
   const int n = cv::connectedComponentsWithStats(region, labels, stats, centroids, 8, CV_32S);
   cv::Mat out(region.size(), CV_8U, cv::Scalar(0));
@@ -40,8 +40,35 @@ cv::Mat clean_region(const cv::Mat& region, int min_pixels) {
   cv::Mat outside;
   cv::copyMakeBorder(out, outside, 1, 1, 1, 1, cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::floodFill(outside, cv::Point(0, 0), cv::Scalar(128));
-  const cv::Mat inner = outside(cv::Rect(1, 1, out.cols, out.rows));
-  out.setTo(255, inner == 0);
+  const cv::Mat holes = outside(cv::Rect(1, 1, out.cols, out.rows)) == 0;
+  if (inv_depth.empty()) {
+    out.setTo(255, holes);
+    return out;
+  }
+  // A hole is the inside of a slow or textureless object (its middle lands on itself and
+  // matches) unless its depth lies behind the region around it: then it is the background seen
+  // through the object (a ring's or a torus' hole, the gap between an arm and the body) and stays
+  // open. Behind: its median inverse depth more than 5 % below the median of the region's
+  // pixels within 3 px of it.
+  cv::Mat hole_labels;
+  const int holes_n = cv::connectedComponents(holes, hole_labels, 4, CV_32S);
+  const cv::Mat k7 = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7));
+  auto median_of = [&](const cv::Mat& where) {
+    std::vector<float> v;
+    for (int y = 0; y < where.rows; ++y)
+      for (int x = 0; x < where.cols; ++x)
+        if (where.at<uint8_t>(y, x)) v.push_back(inv_depth.at<float>(y, x));
+    if (v.empty()) return 0.0f;
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  for (int k = 1; k < holes_n; ++k) {
+    const cv::Mat hole = hole_labels == k;
+    cv::Mat ring;
+    cv::dilate(hole, ring, k7);
+    ring &= out;
+    if (median_of(hole) >= 0.95f * median_of(ring)) out.setTo(255, hole);
+  }
   return out;
 }
 
@@ -49,7 +76,9 @@ cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double st
   // Each connected part of the moving region grows over its surfaces (a person's torso that
   // hardly moves under a moving head and arms): to 4-neighbours whose inverse depth differs by
   // less than `step` (relative) and that lie no farther than the part's 10th percentile
-  // inverse depth minus 5 %, so that a slow ramp cannot lead onto the background behind. A
+  // inverse depth minus 5 %, so that a slow ramp cannot lead onto the background behind, and no
+  // nearer than its 90th percentile plus 5 %, so that it cannot run down a floor towards the
+  // camera from where the object stands on it. A
   // part that would add more than `max_growth` times its area, or a quarter of the frame,
   // stands on a surface that goes on (a false region on a wall, an object just in front of
   // the wall): it keeps its own pixels only. The 5 % and the quarter were chosen on family
@@ -66,6 +95,8 @@ cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double st
         if (labels.at<int>(y, x) == k) queue.push_back({x, y}), ws.push_back(inv_depth.at<float>(y, x));
     std::nth_element(ws.begin(), ws.begin() + long(ws.size() / 10), ws.end());
     const float floor_w = ws[ws.size() / 10] * 0.95f;
+    std::nth_element(ws.begin(), ws.begin() + long(ws.size() * 9 / 10), ws.end());
+    const float ceiling_w = ws[ws.size() * 9 / 10] * 1.05f;
     const size_t limit = std::min(size_t(max_growth * double(queue.size())), region.total() / 4);
     cv::Mat grown(region.size(), CV_8U, cv::Scalar(0));
     std::vector<cv::Point> added;
@@ -77,7 +108,7 @@ cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double st
         const cv::Point q = p + d;
         if (q.x < 0 || q.y < 0 || q.x >= w || q.y >= h || region.at<uint8_t>(q) || grown.at<uint8_t>(q)) continue;
         const float wq = inv_depth.at<float>(q);
-        if (wq < floor_w || std::abs(wq - wp) > step * wp) continue;
+        if (wq < floor_w || wq > ceiling_w || std::abs(wq - wp) > step * wp) continue;
         grown.at<uint8_t>(q) = 255;
         added.push_back(q);
         queue.push_back(q);
@@ -96,13 +127,16 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
   const cv::Mat k5 = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
   cv::morphologyEx(region, region, cv::MORPH_OPEN, k3);
   cv::morphologyEx(region, region, cv::MORPH_CLOSE, k5);
-  region = clean_region(region, min_pixels);
+  region = clean_region(region, min_pixels, inv_depth);
   if (options.grow_depth > 0) region = grow_on_depth(region, inv_depth, options.grow_depth, options.grow_limit);
   if (!options.grabcut || cv::countNonZero(region) == 0) return region;
 
   // GrabCut inside a band around the region: sure background beyond it, probable background in
   // it, probable foreground in the region, sure foreground where the score is high well inside.
-  const int band = std::max(6, int(0.04 * std::min(score.cols, score.rows)));
+  // The band is wide (options.grabcut_band, 11 % of the smaller side) so that an object's smooth
+  // middle between two moving ends (Balloon1's balloon) can join them; docs/masks.md has the
+  // measurements the width was chosen by.
+  const int band = std::max(6, int(options.grabcut_band * std::min(score.cols, score.rows)));
   cv::Mat near_region;
   cv::dilate(region, near_region, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * band + 1, 2 * band + 1)));
   cv::Mat inner;
@@ -126,8 +160,20 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
   cv::grabCut(bgr(roi), gc_roi, cv::Rect(), bgd, fgd, 3, cv::GC_INIT_WITH_MASK);
   gc_roi.copyTo(gc(roi));
   cv::Mat out = (gc == cv::GC_FGD) | (gc == cv::GC_PR_FGD);
+  {
+    // GrabCut goes by colour alone; what it adds must not lie behind the region (background of
+    // the object's colours seen around it): not farther than the region's 10th percentile
+    // inverse depth minus 5 %, as for the growth.
+    std::vector<float> ws;
+    for (int y = 0; y < region.rows; ++y)
+      for (int x = 0; x < region.cols; ++x)
+        if (region.at<uint8_t>(y, x)) ws.push_back(inv_depth.at<float>(y, x));
+    std::nth_element(ws.begin(), ws.begin() + long(ws.size() / 10), ws.end());
+    const cv::Mat behind = inv_depth < double(ws[ws.size() / 10]) * 0.95;
+    out.setTo(0, behind & ~region);
+  }
   cv::morphologyEx(out, out, cv::MORPH_OPEN, k3);
-  return clean_region(out, min_pixels);
+  return clean_region(out, min_pixels, inv_depth);
 }
 
 }  // namespace nova::masks

@@ -14,10 +14,11 @@
 //    cannot vanish). The score of a pixel is the mean of its lower half of those scores, so
 //    one neighbour's occlusion or glare does not look like motion.
 // 3. Masks: the score, smoothed, above a threshold taken from its own distribution (a robust
-//    noise level, never below an absolute floor), cleaned (small regions dropped, holes
-//    filled), grown over the depth's smooth surfaces where that stays bounded (the parts of a
-//    moving object that hardly move) and its edges moved to the image's colour edges
-//    (OpenCV's GrabCut).
+//    noise level, never below an absolute floor), cleaned (small regions dropped, holes filled
+//    unless their depth lies behind the region: background seen through the object), grown
+//    over the depth's smooth surfaces where that stays bounded (the parts of a moving object
+//    that hardly move) and its edges moved to the image's colour edges (OpenCV's GrabCut, which
+//    may not add pixels behind the region).
 // 4. Objects: connected regions, tracked through time by overlap; a track is an object where
 //    it is seen in enough frames. --objects K merges the smaller tracks into the nearest of
 //    the K largest.
@@ -48,6 +49,8 @@ struct MotionMaskOptions {
   double min_area = 0.002;               // regions smaller than this fraction of a frame drop
   double min_track_frames = 0.15;        // a track is an object in this fraction of frames (and 2)
   bool grabcut = true;                   // refine edges on the image
+  double grabcut_band = 0.11;            // GrabCut works this far around the region (fraction of
+                                         // the frame's smaller side)
   std::function<void(const std::string&)> progress;  // one line per stage (may be empty)
 };
 
