@@ -1,4 +1,4 @@
-// nova masks (include/nova/io/motion_masks.hpp): the reprojection against a float64
+// nova masks (include/nova/masks/motion_masks.hpp): the reprojection against a float64
 // reference, the masks of the tiny synthetic scene against its exact masks, the growth over
 // the depth's surfaces and the hole filling on made-up depths, and bad input
 // (missing disparity or poses, a static video, nothing left behind on failure).

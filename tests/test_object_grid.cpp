@@ -90,4 +90,28 @@ BOOST_AUTO_TEST_CASE(option_is_checked_against_the_coarsest_level) {
   }
 }
 
+// A rigid object's canonical field takes hash-canonical-max-res; the (x, y, z, t) field keeps
+// hash-object-max-res whatever it says, and 0 falls back to hash-object-max-res (what a run
+// written before the option meant).
+BOOST_AUTO_TEST_CASE(canonical_fields_use_their_own_finest_level) {
+  FieldConfig f = small_hash_field();
+  f.object_max_resolution = 16;
+  f.canonical_max_resolution = 32;
+  BOOST_TEST(object_hash_config(f).max_resolution == 16);
+  f.motion = ObjectMotion::Rigid;
+  BOOST_TEST(object_hash_config(f).max_resolution == 32);
+  f.canonical_max_resolution = 0;
+  BOOST_TEST(object_hash_config(f).max_resolution == 16);
+
+  TrainConfig c = preset_config("quick");
+  BOOST_TEST(c.field.canonical_max_resolution == 128);
+  BOOST_TEST(preset_config("reference").field.canonical_max_resolution == 0);
+  set_config_value(c, "object-motion", "rigid");
+  set_config_value(c, "hash-canonical-max-res", "8");  // below hash-min-res 16
+  BOOST_CHECK_THROW(validate(c), Error);
+  set_config_value(c, "hash-canonical-max-res", "64");
+  validate(c);
+  BOOST_TEST(object_hash_config(c.field).max_resolution == 64);
+}
+
 BOOST_AUTO_TEST_SUITE_END()

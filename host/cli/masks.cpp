@@ -1,5 +1,5 @@
 // `nova masks --scene DIR`: the motion masks of a video from its frames, poses and disparity
-// (include/nova/io/motion_masks.hpp), written as the scene's motion_masks/ folder.
+// (include/nova/masks/motion_masks.hpp), written as the scene's motion_masks/ folder.
 #include <chrono>
 #include <filesystem>
 #include <iostream>

@@ -1,4 +1,4 @@
-// The analytic world of the synthetic scenes (see include/nova/io/synth.hpp): the fixed presets'
+// The analytic world of the synthetic scenes (see include/nova/data/synth.hpp): the fixed presets'
 // scene, procedural textures, motion and a one-ray-per-pixel ray tracer. Plain double
 // arithmetic in a fixed order, one thread, so equal inputs give equal bytes.
 #include <algorithm>

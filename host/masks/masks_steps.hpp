@@ -1,5 +1,5 @@
 #pragma once
-// The steps of make_motion_masks (include/nova/io/motion_masks.hpp), one file each:
+// The steps of make_motion_masks (include/nova/masks/motion_masks.hpp), one file each:
 // reprojection.cpp (frames as float images, the pair geometry, the fitted depth), motion_score.cpp,
 // segment.cpp (threshold, clean-up, GrabCut) and tracks.cpp (objects through time).
 #include <opencv2/core.hpp>

@@ -1,4 +1,4 @@
-// make_motion_masks and write_motion_masks (include/nova/io/motion_masks.hpp): the steps of
+// make_motion_masks and write_motion_masks (include/nova/masks/motion_masks.hpp): the steps of
 // masks_steps.hpp in order, and the motion_masks folder with its check pictures.
 #include "nova/masks/motion_masks.hpp"
 

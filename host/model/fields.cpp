@@ -36,6 +36,7 @@ Tensor encode(Tensor x, const FieldConfig& c, const HashGridConfig& hash, const 
 HashGridConfig object_hash_config(const FieldConfig& c) {
   HashGridConfig h = c.hash;
   if (c.object_max_resolution > 0) h.max_resolution = c.object_max_resolution;
+  if (c.motion == ObjectMotion::Rigid && c.canonical_max_resolution > 0) h.max_resolution = c.canonical_max_resolution;
   return h;
 }
 

@@ -153,6 +153,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("hash-object-max-res", "hash grid of the object NeRFs: cells per dimension of the finest level (0: hash-max-res)", 0, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.field.object_max_resolution; }));
   o.back().before = "0";
+  o.push_back(int_option("hash-canonical-max-res", "hash grid of a rigid object's canonical field (object-motion rigid): cells per dimension of the finest level (0: hash-object-max-res)", 0, 1 << 20,
+                         [](TrainConfig& c) -> int& { return c.field.canonical_max_resolution; }));
+  o.back().before = "0";
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: from the scene: NDC, the training rays' extent (see hash-ndc-box-from-rays); else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray along x and y (more than [-1, 1] where the camera moves sideways); false: [-1, 1]^3",

@@ -52,6 +52,9 @@ struct FieldConfig {
   // object is seen from one camera per time, so fine levels it cannot constrain fill with
   // hash-collision noise when it is viewed from elsewhere.
   int object_max_resolution = 0;
+  // The same for a rigid object's canonical field (0: object_max_resolution). Every frame's
+  // camera sees that one shape, so it can use finer cells than a field of (x, y, z, t).
+  int canonical_max_resolution = 0;
   // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
   // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
   ObjectMotion motion = ObjectMotion::None;
@@ -66,7 +69,8 @@ struct FieldConfig {
 // positions [M, 3], viewdirs [M, 3] (unused without view_dirs) -> raw [M, 5].
 Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& config);
 
-// The object NeRFs' hash grid: `hash` with object_max_resolution in place of its finest level.
+// The object NeRFs' hash grid: `hash` with object_max_resolution (a rigid canonical field:
+// canonical_max_resolution, when set) in place of its finest level.
 HashGridConfig object_hash_config(const FieldConfig& config);
 
 // positions [B, M, 3] (or [M, 3] for B = 1), times of the same shape with 1 column -> raw
