@@ -2,9 +2,12 @@
 // host BLAS where the device runs native kernels) against a float64 host reference, for the
 // NeRF layer shapes and the transposed products the backward uses.
 #include <boost/test/unit_test.hpp>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <dlfcn.h>
 #include <limits>
+#include <thread>
 
 #include "harness.hpp"
 #include "nova/ops/linalg/gemm.hpp"
@@ -252,6 +255,91 @@ BOOST_AUTO_TEST_CASE(host_blas_thread_count_is_restored) {
   }
   set_gemm_provider(rt, chosen);
   dlclose(lib);
+}
+
+namespace {
+
+// A native kernel that holds the queue until `open` is set (10 s at most, so that a broken
+// test cannot hang): the commands behind it wait in the queue while the test releases buffers.
+void CL_CALLBACK wait_for_gate(void* p) {
+  const auto* open = *static_cast<std::atomic<bool>* const*>(p);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!open->load() && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+}
+
+// What a released operand's destructor saw: whether C already held the product, i.e.
+// whether its memory lived until the GEMM had read it.
+struct Freed {
+  const float* c;
+  size_t count;
+  float expected;
+  std::atomic<int> destroyed{0}, before_product{0};
+};
+
+// C's memory, which a CPU device's buffer keeps on the host (Runtime::alloc).
+const float* host_floats(cl_mem m) {
+  void* p = nullptr;
+  cl_check(clGetMemObjectInfo(m, CL_MEM_HOST_PTR, sizeof(p), &p, nullptr), "clGetMemObjectInfo");
+  return static_cast<const float*>(p);
+}
+
+void CL_CALLBACK note_destroyed(cl_mem, void* p) {
+  auto* f = static_cast<Freed*>(p);
+  bool done = true;
+  for (size_t i = 0; i < f->count; ++i) done = done && f->c[i] == f->expected;
+  f->before_product += !done;
+  ++f->destroyed;
+}
+
+}  // namespace
+
+// The host provider's native kernel reads its operands through host addresses, out of the
+// runtime's sight: operands released while the product still waits in the queue (an error
+// unwinding a training step's Executor, which gives back its arena at once) must keep their
+// memory until the product has run. A is a sub-buffer, as the executor's arena hands it out:
+// its parent holds the memory. A gate holds the queue so that the buffers are certainly
+// released before the product starts.
+BOOST_AUTO_TEST_CASE(host_gemm_keeps_released_operands_until_done) {
+  Runtime& rt = test::runtime();
+  if (!host_gemm_available(rt)) {
+    BOOST_TEST_MESSAGE("skipped: the device has no host BLAS provider");
+    return;
+  }
+  const GemmProvider chosen = gemm_provider(rt);
+  set_gemm_provider(rt, GemmProvider::Host);
+  constexpr size_t m = 256, n = 16, k = 32;
+  Buffer c = rt.upload_floats(std::vector<float>(m * n, -1.0f));
+  Freed freed{host_floats(c.get()), m * n, 0.5f * 0.25f * k + 1.0f};
+  {
+    const size_t align = std::max<size_t>(rt.info().base_addr_align_bytes, 4);
+    Buffer parent = rt.alloc(align + m * k * sizeof(float));
+    Buffer a = rt.sub_buffer(parent, align, m * k * sizeof(float));
+    rt.upload(a.get(), std::vector<float>(m * k, 0.5f).data(), m * k * sizeof(float));
+    Buffer b = rt.upload_floats(std::vector<float>(k * n, 0.25f));
+    Buffer bias = rt.upload_floats(std::vector<float>(n, 1.0f));
+    for (cl_mem mem : {parent.get(), b.get(), bias.get()})
+      BOOST_REQUIRE(clSetMemObjectDestructorCallback(mem, note_destroyed, &freed) == CL_SUCCESS);
+    std::atomic<bool> open{false};
+    std::atomic<bool>* gate = &open;
+    BOOST_REQUIRE(clEnqueueNativeKernel(rt.queue(), wait_for_gate, &gate, sizeof(gate), 0, nullptr, nullptr,
+                                        0, nullptr, nullptr) == CL_SUCCESS);
+    GemmArgs g{false, false, m, n, k, 1.0f, a.get(), k, m * k, b.get(), n, k * n, 0.0f, c.get(), n, m * n, 1};
+    nova::gemm(rt, g, nullptr, GemmEpilogue{bias.get(), 0, Activation::ReLU});
+    a = Buffer();
+    parent = Buffer();
+    b = Buffer();
+    bias = Buffer();
+    open = true;
+    rt.finish();
+  }
+  BOOST_TEST(freed.destroyed.load() == 3);
+  BOOST_TEST(freed.before_product.load() == 0,
+             freed.before_product.load() << " of 3 released operands freed before the product had run");
+  const auto out = rt.download_floats(c.get(), m * n);
+  BOOST_TEST(out.front() == freed.expected);
+  BOOST_TEST(out.back() == freed.expected);
+  set_gemm_provider(rt, chosen);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

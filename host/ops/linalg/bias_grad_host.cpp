@@ -80,7 +80,8 @@ void bias_grad_rows_host(Runtime& rt, Matrix3 s, Activation act, size_t parts, c
                           dh && n > 0 ? host_address(dh, "dh") : nullptr,
                           s.batch, s.rows, s.cols, parts,
                           act == Activation::ReLU, acc_dh, threads};
-  enqueue_native(rt, run_bias_grad, call, "clEnqueueNativeKernel(host bias gradient)");
+  enqueue_native(rt, run_bias_grad, call, {y, dy, partials, dh},
+                 "clEnqueueNativeKernel(host bias gradient)");
 }
 
 }  // namespace nova::detail

@@ -212,7 +212,7 @@ void host_gemm(Runtime& rt, const GemmArgs& g, const GemmEpilogue& epi) {
                           g.stride_a, g.stride_b, g.stride_c, g.batch,
                           epi.bias ? host_address(epi.bias, "bias") : nullptr, epi.stride_bias,
                           epi.act == Activation::ReLU};
-  detail::enqueue_native(rt, run_host_gemm, call, "clEnqueueNativeKernel(host GEMM)");
+  detail::enqueue_native(rt, run_host_gemm, call, {g.a, g.b, g.c, epi.bias}, "clEnqueueNativeKernel(host GEMM)");
 }
 
 }  // namespace nova
