@@ -38,3 +38,13 @@ __kernel void repeat_rows(__global const float* x, __global float* out, uint bat
   if (i >= batches * rows * cols) return;
   out[i] = x[(i / (rows * cols)) * cols + i % cols];
 }
+
+// y[m, c] (+)= x[m, c] w[c]: a per-column weight (a coarse-to-fine window over an encoding's
+// levels). Its backward is the same product of the upstream gradient.
+__kernel void scale_cols(__global const float* x, __global const float* w, __global float* y,
+                         uint rows, uint cols, int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= rows * cols) return;
+  const float v = x[i] * w[i % cols];
+  y[i] = accumulate ? y[i] + v : v;
+}

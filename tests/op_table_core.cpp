@@ -1,5 +1,5 @@
 // The op table's tensor and layer ops: positional_encoding, bias_act, linear, dense, concat,
-// gradient_gate, repeat_rows and the random draws. The 1009-row shapes are the odd-size sweep
+// gradient_gate, repeat_rows, scale_columns and the random draws. The 1009-row shapes are the odd-size sweep
 // (several work-groups and a partial last one); the 1-row ones a single, partial group.
 #include <algorithm>
 #include <cmath>
@@ -361,6 +361,43 @@ OpEntry repeat_rows_entry() {
   return e;
 }
 
+OpEntry scale_columns_entry() {
+  OpEntry e;
+  e.name = "scale_columns";
+  // dims: rows M, cols C, batches B (x [M, C] for B = 1, else [B, M, C]); weights [C] are data.
+  e.shapes = {{{kOddRows, 6, 1}, 0, "1009 x 6"},
+              {{1, 3, 1}, 0, "1 x 3"},
+              {{13, 4, 3}, 0, "[3, 13, 4], weights shared by the batches"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    const Shape xs = s.dims[2] == 1 ? Shape{s.dims[0], s.dims[1]} : Shape{s.dims[2], s.dims[0], s.dims[1]};
+    Tensor x = g.input("x", xs, true), w = g.input("w", Shape{s.dims[1]});
+    return OpGraph{{x, w}, {scale_columns(x, w)}, {}};
+  };
+  e.values = [](const OpShape& s) {
+    // Weights in [0, 1] with an exact 1 and 0, as a coarse-to-fine window has.
+    auto w = random_floats(s.dims[1], 0, 1, 129);
+    w[0] = 1.0f;
+    if (w.size() > 2) w.back() = 0.0f;
+    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1] * s.dims[2], -1, 1, 128), w};
+  };
+  // One float32 product per element, correctly rounded: within 2^-24 relative (rtol 6e-8).
+  e.reference = [](const OpCase& c) {
+    const size_t C = c.shape.dims[1];
+    std::vector<double> ref;
+    for (size_t i = 0; i < c.values[0].size(); ++i) ref.push_back(double(c.values[0][i]) * c.values[1][i % C]);
+    return std::vector<Expected>{{ref, {0, 6e-8}}};
+  };
+  e.gradient = [](const OpCase& c) {
+    const size_t C = c.shape.dims[1];
+    std::vector<double> dx;
+    for (size_t i = 0; i < c.upstream[0].size(); ++i) dx.push_back(c.upstream[0][i] * c.values[1][i % C]);
+    return std::vector<Expected>{grad_expected(dx), {}};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return 2.0 * double(s.dims[0] * s.dims[1] * s.dims[2]); };
+  return e;
+}
+
 OpEntry random_entry(bool normal) {
   OpEntry e;
   e.name = normal ? "random_normal" : "random_uniform";
@@ -394,6 +431,7 @@ void register_core_ops(std::vector<OpEntry>& t) {
   t.push_back(concat_entry());
   t.push_back(gradient_gate_entry());
   t.push_back(repeat_rows_entry());
+  t.push_back(scale_columns_entry());
   t.push_back(random_entry(false));
   t.push_back(random_entry(true));
 }

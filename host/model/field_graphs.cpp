@@ -135,7 +135,7 @@ MotionOptions motion_options(const RayGeometry& g) {
 }
 
 Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, const RayGeometry& g,
-                  std::shared_ptr<PackSelect> pack, Tensor motion) {
+                  std::shared_ptr<PackSelect> pack, Tensor motion, Tensor level_window) {
   const Shape& ps = positions.shape();
   // The objects' times spread over their rows (a canonical field does not read them: a
   // placeholder of the right shape).
@@ -149,9 +149,9 @@ Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, const Ra
   const auto place = [&](Tensor p, bool differentiable) {
     return moved ? rigid_motion(p, times, motion, mo, differentiable) : p;
   };
-  if (!pack) return build_object_fields(place(positions, true), row_times, f);
+  if (!pack) return build_object_fields(place(positions, true), row_times, f, level_window);
   Packed p = pack_occupied(place(positions, false), pack);
-  Tensor raw = build_object_fields(place(gather_rows(positions, p), true), gather_rows(row_times, p), f);
+  Tensor raw = build_object_fields(place(gather_rows(positions, p), true), gather_rows(row_times, p), f, level_window);
   return scatter_rows(raw, p, empty_raw_fill(raw.shape().cols()));
 }
 

@@ -60,7 +60,7 @@ Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& 
   return concat({rgb, sigma_blend});
 }
 
-Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c) {
+Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c, Tensor level_window) {
   const Shape& ps = positions.shape();
   const bool batched = ps.rank() == 3;
   if (!(ps.rank() == 2 || batched) || ps.cols() != 3)
@@ -72,9 +72,21 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c)
     throw Error("object fields: times must be " + ts.str() + ", got " + times.shape().str(),
                 kExitInternal);
   const int networks = batched ? static_cast<int>(ps[0]) : 1;
-  Tensor xyzt = c.motion == ObjectMotion::Rigid ? positions : concat({positions, times});
-  return build_mlp(encode(xyzt, c, object_hash_config(c), "objects.hash", networks), trunk_config(c, 5, networks),
-                   "objects.trunk").output;
+  const bool rigid = c.motion == ObjectMotion::Rigid;
+  Tensor xyzt = rigid ? positions : concat({positions, times});
+  Tensor encoded = encode(xyzt, c, object_hash_config(c), "objects.hash", networks);
+  if (level_window.valid()) {
+    if (c.encoding != Encoding::HashGrid) throw Error("object fields: a level window needs a hash grid", kExitInternal);
+    encoded = scale_columns(encoded, level_window);
+  }
+  if (!rigid || c.canonical_colour_time_freqs < 0)
+    return build_mlp(encoded, trunk_config(c, 5, networks), "objects.trunk").output;
+  Tensor feature = build_mlp(encoded, trunk_config(c, c.width, networks), "objects.trunk").output;
+  Tensor sigma_blend = dense_layer(feature, 2, Activation::Identity, "objects.sigma_blend", networks);
+  Tensor colour_in = concat({feature, positional_encoding(times, c.canonical_colour_time_freqs)});
+  Tensor hidden = dense_layer(colour_in, std::max(1, c.width / 2), Activation::ReLU, "objects.colour", networks);
+  Tensor rgb = dense_layer(hidden, 3, Activation::Identity, "objects.rgb", networks);
+  return concat({rgb, sigma_blend});
 }
 
 }  // namespace nova

@@ -1,5 +1,9 @@
 #include "nova/train/step_graphs.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
 #include "nova/runtime/error.hpp"
 #include "nova/loss/objective.hpp"
 #include "nova/loss/terms.hpp"
@@ -52,6 +56,16 @@ void draw_randomness(StepGraph& s, const TrainConfig& c, size_t R, size_t S, Ray
 
 }  // namespace
 
+std::vector<float> level_window(int levels, int features, double progress) {
+  const double a = levels * std::clamp(progress, 0.0, 1.0);
+  std::vector<float> w;
+  for (int l = 0; l < levels; ++l) {
+    const double x = l == 0 ? 1.0 : std::clamp(a - l, 0.0, 1.0);
+    w.insert(w.end(), static_cast<size_t>(features), static_cast<float>((1.0 - std::cos(x * std::numbers::pi)) / 2.0));
+  }
+  return w;
+}
+
 bool disparity_usable(const RayGeometry& g) { return g.disparity && g.ndc; }
 
 std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayGeometry& geo, RaySlice slice) {
@@ -102,7 +116,9 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
   if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
   if (field.motion == ObjectMotion::Rigid) s->motion = motion_parameter(g, K, motion_options(geo).frames);
-  Tensor raw_objects = object_raw(smp.positions[1], s->times, field, geo, s->pack_objects, s->motion);
+  if (field.motion == ObjectMotion::Rigid && c.canonical_coarse_to_fine > 0)
+    s->level_window = g.input("level_window", Shape{static_cast<size_t>(field.hash.outputs())});
+  Tensor raw_objects = object_raw(smp.positions[1], s->times, field, geo, s->pack_objects, s->motion, s->level_window);
   Tensor raw = stack({raw_static, raw_objects});
   const RenderOptions ro = joint_render_options(c.conventions, c.weights);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);

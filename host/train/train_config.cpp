@@ -156,6 +156,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("hash-canonical-max-res", "hash grid of a rigid object's canonical field (object-motion rigid): cells per dimension of the finest level (0: hash-object-max-res)", 0, 1 << 20,
                          [](TrainConfig& c) -> int& { return c.field.canonical_max_resolution; }));
   o.back().before = "0";
+  o.push_back(int_option("canonical-colour-time-freqs", "object-motion rigid: a canonical field's colour also reads time, encoded with this many frequencies, as the shade of a turning object changes under a fixed light (-1: colour of the position alone; density never reads time)", -1, 24,
+                         [](TrainConfig& c) -> int& { return c.field.canonical_colour_time_freqs; }));
+  o.back().before = "-1";
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: from the scene: NDC, the training rays' extent (see hash-ndc-box-from-rays); else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray along x and y (more than [-1, 1] where the camera moves sideways); false: [-1, 1]^3",
@@ -232,6 +235,9 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "none";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
+  o.push_back(int_option("canonical-coarse-to-fine", "object-motion rigid, hash grid: joint steps over which the canonical grid's levels open from coarse to fine, so the motion aligns coarse shapes first (0: every level from the start)", 0, kBig,
+                         [](TrainConfig& c) -> int& { return c.canonical_coarse_to_fine; }));
+  o.back().before = "0";
   o.push_back(float_option("lr-motion", "object-motion rigid: the trajectories' learning rate as a fraction of lr (0: kept where the frames' alignment put them)", 0.0, 1.0,
                            [](TrainConfig& c) -> float& { return c.lr_motion; }));
   o.back().before = "1";
@@ -309,6 +315,9 @@ void validate(const TrainConfig& c) {
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");
   if (c.pretrain_steps + static_cast<long>(c.steps) <= 0)
     throw Error("options 'pretrain-steps' and 'steps': both are 0, nothing to train");
+  if (c.canonical_coarse_to_fine > 0 && c.field.encoding != Encoding::HashGrid)
+    throw Error("option 'canonical-coarse-to-fine': opens a hash grid's levels, but 'encoding' is " +
+                std::string(encoding_name(c.field.encoding)));
 }
 
 }  // namespace nova

@@ -182,6 +182,11 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   if (joint) {
     exec_->set(graph_->target_masks, batch.masks);
     exec_->set(graph_->times, std::vector<float>(static_cast<size_t>(scene_.num_objects), static_cast<float>(frame.time)));
+    if (graph_->level_window.valid()) {
+      const HashGridConfig& h = object_hash_config(config_.field);
+      exec_->set(graph_->level_window,
+                 level_window(h.levels, h.features, static_cast<double>(phase_step) / c.canonical_coarse_to_fine));
+    }
   }
   exec_->forward();
   exec_->backward();

@@ -51,9 +51,9 @@ Tensor static_raw(Tensor positions, Tensor viewdirs, const FieldConfig& f, std::
 // as static_raw. With a rigid motion the samples are moved into each object's canonical space
 // first by `motion` (motion_parameter; the packing tests the canonical positions); without
 // `motion` the positions are canonical already (a view: the renderer composes each object's
-// motion at its time into the instance's transform).
+// motion at its time into the instance's transform). level_window: build_object_fields'.
 Tensor object_raw(Tensor positions, Tensor times, const FieldConfig& f, const RayGeometry& g,
-                  std::shared_ptr<PackSelect> pack, Tensor motion = {});
+                  std::shared_ptr<PackSelect> pack, Tensor motion = {}, Tensor level_window = {});
 // The rigid_motion options of the scene's time axis and rays.
 MotionOptions motion_options(const RayGeometry& g);
 

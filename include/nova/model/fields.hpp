@@ -10,7 +10,10 @@
 //            feature -> sigma, blend;  [feature, PE_Ld(viewdir)] -> width/2 ReLU -> rgb
 //            (with view_dirs off the rgb head reads the feature alone)
 //   object:  [PE_L(xyzt)] -> trunk -> rgb, sigma, blend (view-independent, as the reference's
-//            dynamic NeRF); with a rigid motion [PE_L(xyz)] of the canonical position alone
+//            dynamic NeRF); with a rigid motion [PE_L(xyz)] of the canonical position alone,
+//            and with canonical_colour_time_freqs >= 0 the static field's layout with time in
+//            place of the view direction: trunk -> feature -> sigma, blend;
+//            [feature, PE(t)] -> width/2 ReLU -> rgb
 // Parameter names: "static.*" and "objects.*"; object parameters carry a leading object
 // dimension [K, ...] when K > 1, so one object's weights are a slice of them.
 #include <string>
@@ -55,6 +58,12 @@ struct FieldConfig {
   // The same for a rigid object's canonical field (0: object_max_resolution). Every frame's
   // camera sees that one shape, so it can use finer cells than a field of (x, y, z, t).
   int canonical_max_resolution = 0;
+  // A rigid object's colour as a function of time as well as of its canonical position: the
+  // positional encoding's frequencies of t (< 0: colour of the position alone). The light
+  // stays put in the world while the object turns, so a face's shade changes from frame to
+  // frame; a colour fixed in canonical space can only average those shades. Density and blend
+  // never read time, so the shape stays one shape.
+  int canonical_colour_time_freqs = -1;
   // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
   // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
   ObjectMotion motion = ObjectMotion::None;
@@ -75,8 +84,10 @@ HashGridConfig object_hash_config(const FieldConfig& config);
 
 // positions [B, M, 3] (or [M, 3] for B = 1), times of the same shape with 1 column -> raw
 // [B, M, 5] (or [M, 5]). B object networks with independent weights. With a rigid motion the
-// positions are canonical and the times are not read.
-Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& config);
+// positions are canonical and the times are not read (but by a time-dependent colour).
+// level_window [levels * features] (data; a hash grid only): the encoding's columns scaled by
+// it before the trunk, training's coarse-to-fine window (level_window in step_graphs.hpp).
+Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& config, Tensor level_window = {});
 
 // Parameter name prefixes, for checkpoints and the inference renderer.
 inline const std::string kStaticPrefix = "static.";

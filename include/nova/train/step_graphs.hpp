@@ -35,6 +35,9 @@ struct StepGraph {
   // The objects' rigid trajectories (motion.hpp) when the field has them: a parameter the
   // trainer sets from the masks on entering the joint phase.
   Tensor motion;
+  // [levels * features] with TrainConfig::canonical_coarse_to_fine: the canonical grid's
+  // coarse-to-fine window, set every joint step (level_window).
+  Tensor level_window;
   Tensor loss;
   std::vector<std::pair<std::string, Tensor>> terms;  // unweighted, for metrics
   Tensor psnr_mse;  // the composite-colour mse the progress PSNR is computed from
@@ -42,6 +45,11 @@ struct StepGraph {
   // (null: no packing). Their grids are unset, so nothing is skipped until the owner sets them.
   std::shared_ptr<PackSelect> pack_static, pack_objects;
 };
+
+// The coarse-to-fine window of a hash grid's `levels` levels of `features` columns each at
+// `progress` in [0, 1] (BARF's): level l weighs (1 - cos(pi clamp(a - l, 0, 1))) / 2 with
+// a = levels * progress, the coarsest level always 1; every level 1 from progress 1 on.
+std::vector<float> level_window(int levels, int features, double progress);
 
 // Whether the scene's disparity can supervise depth: every frame has a map, and rays are NDC
 // (where the rendered depth is affine in disparity; metric depth is not).

@@ -21,4 +21,8 @@ Tensor gradient_gate(Tensor x, Tensor gate, size_t gate_row = 0);
 // Spreads a per-group constant (an object's time) over its samples without a host upload.
 Tensor repeat_rows(Tensor x, size_t rows);
 
+// y[..., c] = x[..., c] w[c] for weights [C] (data): every row's columns scaled alike.
+// Differentiable in x.
+Tensor scale_columns(Tensor x, Tensor weights);
+
 }  // namespace nova

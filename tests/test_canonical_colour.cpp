@@ -1,0 +1,104 @@
+// A rigid object's canonical field may give its colour a time input (canonical-colour-time-
+// freqs): the shade of a turning object changes under a fixed light. The shape must stay one
+// shape: density and blend may not read time, colour must, and without the option the field
+// is the position-only one with its old parameters (checkpoints written before it still load).
+#include <boost/test/unit_test.hpp>
+#include <set>
+#include <string>
+
+#include "harness.hpp"
+#include "nova/graph/executor.hpp"
+#include "nova/model/fields.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/train/train_config.hpp"
+
+using namespace nova;
+using namespace nova::test;
+
+namespace {
+
+FieldConfig rigid_field(int time_freqs) {
+  FieldConfig f;
+  f.encoding = Encoding::HashGrid;
+  f.hash.levels = 4;
+  f.hash.log2_size = 10;
+  f.hash.min_resolution = 4;
+  f.hash.max_resolution = 32;
+  f.hash.bound = 1.0f;
+  f.depth = 1;
+  f.width = 8;
+  f.skip = -1;
+  f.motion = ObjectMotion::Rigid;
+  f.canonical_colour_time_freqs = time_freqs;
+  return f;
+}
+
+struct FieldRun {
+  std::vector<float> raw;  // [K, M, 5]: rgb, sigma, blend
+  std::set<std::string> parameters;
+};
+
+// Two objects' fields at fixed canonical points and the times `times` (one per row), every
+// parameter drawn from one seed.
+FieldRun run_field(const FieldConfig& f, const std::vector<float>& times) {
+  const size_t K = 2, M = times.size() / K;
+  Graph g;
+  Tensor p = g.input("p", Shape{K, M, 3});
+  Tensor t = g.input("t", Shape{K, M, 1});
+  Tensor out = build_object_fields(p, t, f);
+  g.keep(out);
+  Executor ex(runtime(), g);
+  ex.set(p, random_floats(K * M * 3, -0.9f, 0.9f, 1));
+  ex.set(t, times);
+  FieldRun run;
+  unsigned seed = 10;
+  for (Tensor w : g.parameters()) {
+    ex.set(w, random_floats(w.shape().numel(), -1.0f, 1.0f, seed++));
+    run.parameters.insert(w.info().name);
+  }
+  ex.forward();
+  run.raw = ex.get(out);
+  return run;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(canonical_colour)
+
+BOOST_AUTO_TEST_CASE(time_reaches_colour_and_never_density) {
+  const size_t rows = 2 * 40;
+  const std::vector<float> early(rows, -0.6f), late(rows, 0.7f);
+  const FieldRun a = run_field(rigid_field(3), early), b = run_field(rigid_field(3), late);
+  double colour_change = 0.0;
+  for (size_t r = 0; r < rows; ++r) {
+    for (int c = 0; c < 3; ++c) colour_change = std::max(colour_change, double(std::abs(a.raw[r * 5 + c] - b.raw[r * 5 + c])));
+    // Same points, same parameters, another time: the same density and blend, bit for bit.
+    BOOST_TEST(a.raw[r * 5 + 3] == b.raw[r * 5 + 3]);
+    BOOST_TEST(a.raw[r * 5 + 4] == b.raw[r * 5 + 4]);
+  }
+  // Weights in +-1 over an 8-wide head: a time change of 1.3 moves colour by order 0.1-1.
+  BOOST_TEST(colour_change > 1e-2);
+  for (const char* name : {"objects.sigma_blend.w", "objects.colour.w", "objects.rgb.w"})
+    BOOST_TEST(a.parameters.count(name) == 1u, name);
+}
+
+BOOST_AUTO_TEST_CASE(without_the_option_the_field_reads_position_alone) {
+  const size_t rows = 2 * 40;
+  const FieldRun a = run_field(rigid_field(-1), std::vector<float>(rows, -0.6f));
+  const FieldRun b = run_field(rigid_field(-1), std::vector<float>(rows, 0.7f));
+  BOOST_TEST(a.raw == b.raw, boost::test_tools::per_element());
+  // The position-only layout: hash table and trunk only, as checkpoints before the option.
+  for (const std::string& name : a.parameters)
+    BOOST_TEST((name.rfind("objects.hash", 0) == 0 || name.rfind("objects.trunk.", 0) == 0), name);
+}
+
+BOOST_AUTO_TEST_CASE(option_reads_and_checks_its_range) {
+  TrainConfig c = preset_config("quick");
+  set_config_value(c, "canonical-colour-time-freqs", "4");
+  BOOST_TEST(c.field.canonical_colour_time_freqs == 4);
+  BOOST_CHECK_THROW(set_config_value(c, "canonical-colour-time-freqs", "-2"), Error);
+  BOOST_CHECK_THROW(set_config_value(c, "canonical-colour-time-freqs", "25"), Error);
+  BOOST_TEST(preset_config("reference").field.canonical_colour_time_freqs == -1);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
