@@ -349,7 +349,10 @@ int step(const Args& args) {
   }
   const long steps = o.integer("steps"), warmup = o.integer("warmup"), profile_steps = o.integer("profile-steps");
   if (steps < 1 || warmup < 0 || profile_steps < 0) throw Error("--steps must be >= 1, --warmup and --profile-steps >= 0");
-  if (!o.str("run").empty()) return step_of_run(o, steps, warmup, profile_steps);
+  if (!o.str("run").empty()) {
+    if (!o.str("anchor").empty()) throw Error("--anchor steps on the NOVA code's scene from scratch: drop --run");
+    return step_of_run(o, steps, warmup, profile_steps);
+  }
   const ScratchDir scratch("step");
   AnchorRun anchor;
   if (!o.str("anchor").empty()) {  // before any step: a wrong anchor is found at once

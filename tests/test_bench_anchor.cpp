@@ -86,7 +86,8 @@ BOOST_AUTO_TEST_CASE(a_wrong_anchor_is_refused_before_any_step, *boost::unit_tes
   for (const auto& [args, names] : std::vector<std::pair<std::string, std::string>>{
            {"--anchor " + missing.string(), missing.string() + "' is no folder"},
            {"--anchor " + empty.string(), empty.string() + "' has no run.sh"},
-           {"--anchor " + missing.string() + " --rounds 0", "--rounds"}}) {
+           {"--anchor " + missing.string() + " --rounds 0", "--rounds"},
+           {"--anchor " + missing.string() + " --run " + missing.string(), "drop --run"}}) {
     const CommandResult r = run_built("nova-bench", "step " + args, dir);
     BOOST_TEST(r.code == 2, args);
     BOOST_TEST(r.err.find(names) != std::string::npos, args << ": " << r.err);
