@@ -5,7 +5,9 @@
 // few profiled steps. Occupancy skipping is off (its warm-up would need a trained model): the
 // numbers are those of the dense step, the most a step costs. With --run RUN the bench instead
 // continues a trained run (its configuration, weights, occupancy grids and phase): the step a
-// long training takes once its grids skip empty space. Built only with nova_io.
+// long training takes once its grids skip empty space. With --anchor DIR it alternates nova's
+// steps with the original NOVA code's (bench/anchor_run.hpp) on the same scene and networks and
+// prints the ratios. Built only with nova_io.
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -14,6 +16,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 #include "bench.hpp"
@@ -23,6 +26,8 @@
 #include "nova/train/train_config.hpp"
 #include "nova/train/trainer.hpp"
 #include "options.hpp"
+#include "anchor_compare.hpp"
+#include "anchor_run.hpp"
 #include "torch_peer.hpp"
 
 namespace nova::bench {
@@ -76,16 +81,16 @@ std::unique_ptr<TorchPeer> torch_for(const std::string& python, const TrainConfi
 // Seconds per step of `steps` steps after `warmup` untimed ones, from the trainer's current step.
 // The last step's progress report comes after the device has finished it and before run()
 // writes its closing checkpoint, which is no part of a step.
-// With a PyTorch peer the trainer must report every step (log_every 1): each report ends one
-// nova step (its device work done), the peer then runs one step of its own, and both times
-// are medians; `torch_seconds` gets the peer's.
+// With a PyTorch peer or `per_step` the trainer must report every step (log_every 1): each
+// report ends one nova step (its device work done), the peer then runs one step of its own,
+// and the times are medians; `torch_seconds` gets the peer's, `per_step` every timed step's.
 double time_steps(Runtime& rt, Trainer& t, long warmup, long steps, TorchPeer* peer = nullptr,
-                  double* torch_seconds = nullptr) {
+                  double* torch_seconds = nullptr, std::vector<double>* per_step = nullptr) {
   t.run({}, t.step() + warmup);
   rt.finish();
   using clock = std::chrono::steady_clock;
   auto a = clock::now();
-  if (!peer) {
+  if (!peer && !per_step) {
     auto b = a;
     t.run([&](const TrainProgress&) { b = clock::now(); }, t.step() + steps);
     return std::chrono::duration<double>(b - a).count() / static_cast<double>(steps);
@@ -94,11 +99,12 @@ double time_steps(Runtime& rt, Trainer& t, long warmup, long steps, TorchPeer* p
   t.run(
       [&](const TrainProgress&) {
         nova_s.push_back(std::chrono::duration<double>(clock::now() - a).count());
-        torch_s.push_back(peer->step());
+        if (peer) torch_s.push_back(peer->step());
         a = clock::now();
       },
       t.step() + steps);
-  *torch_seconds = median(torch_s);
+  if (peer) *torch_seconds = median(torch_s);
+  if (per_step) *per_step = nova_s;
   return median(nova_s);
 }
 
@@ -200,12 +206,122 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
   return 0;
 }
 
+// The dense step's configuration for one phase: `total` steps of it and nothing else.
+TrainConfig phase_config(TrainConfig c, bool joint, long total) {
+  c.occupancy = false;
+  c.pretrain_steps = joint ? 0 : static_cast<int>(total);
+  c.steps = joint ? static_cast<int>(total) : 0;
+  c.log_every = 1000000;
+  c.checkpoint_every = 1000000;
+  return c;
+}
+
+// The timed row of one preset, phase and object count, on a fresh trainer. `python` (empty:
+// none) times PyTorch's MLPs beside it; `per_step` gets every timed step's seconds.
+Row time_row(Runtime& rt, const Scene& s, const TrainConfig& preset, const std::string& name, bool joint, int K,
+             long warmup, long steps, const fs::path& dir, const std::string& python, bool& told_torch,
+             std::vector<double>* per_step = nullptr) {
+  TrainConfig c = phase_config(preset, joint, warmup + steps);
+  Row r{name, joint ? "joint" : "pretrain", joint ? K : 0, c.rays, c.samples};
+  std::string why;
+  auto peer = torch_for(python, c, 1 + r.objects, why);
+  if (!peer && !told_torch) std::cout << "PyTorch: not compared (" << why << ")\n";
+  told_torch = true;
+  if (peer || per_step) c.log_every = 1;  // a report after every step, where PyTorch takes its turn
+  Trainer t(rt, s, c, dir.string());
+  r.seconds = time_steps(rt, t, warmup, steps, peer.get(), &r.torch_seconds, per_step);
+  r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
+  r.rss_mb = peak_rss_mb();
+  return r;
+}
+
+std::string profile_of(Runtime& prt, const Scene& s, const TrainConfig& preset, const std::string& name, bool joint,
+                       int K, long warmup, long profile_steps, const fs::path& dir) {
+  Trainer t(prt, s, phase_config(preset, joint, warmup + profile_steps), dir.string());
+  t.set_profile(true);
+  return "\n" + name + " " + (joint ? "joint K=" + std::to_string(K) : std::string("pretrain")) + " (" +
+         std::to_string(profile_steps) + " profiled steps)\n" + profiled_steps(t, warmup, profile_steps);
+}
+
+// nova's pretraining and joint rows, then one run of the NOVA code, `rounds` times; then the
+// comparison and one profile of each of nova's phases (after the rounds: no part of a timing).
+int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& preset, const std::string& name, int K,
+                  long warmup, long steps, long profile_steps, AnchorRun anchor, const ScratchDir& scratch) {
+  const long rounds = o.integer("rounds");
+  Runtime rt(select_device(o.str("device")), false);
+  anchor.cpu = (rt.info().type & CL_DEVICE_TYPE_CPU) != 0;
+  anchor.pre_steps = anchor.joint_steps = static_cast<int>(warmup + steps);
+  anchor.skip = static_cast<int>(warmup);
+  anchor = anchor.resolve();
+  std::cout << "device " << rt.info().name << "; scene " << o.str("scene") << " (" << scene.frames[0].camera.width << "x"
+            << scene.frames[0].camera.height << ", K=" << K << ", preset " << name << "); " << rounds
+            << " rounds, each nova's " << warmup << " warm-up + " << steps
+            << " timed steps per phase (dense step), then the NOVA code: " << anchor.describe() << "\n\n";
+  const Scene s = with_objects(scene, K);
+  const std::string python = torch_python(o.str("torch"));
+  bool told_torch = false;
+  std::vector<AnchorRound> done;
+  std::vector<Row> rows;
+  for (long round = 1; round <= rounds; ++round) {
+    AnchorRound a;
+    for (const bool joint : {false, true}) {
+      std::vector<double> each;
+      rows.push_back(time_row(rt, s, preset, name, joint, K, warmup, steps, scratch / "run", python, told_torch, &each));
+      (joint ? a.nova.joint : a.nova.pretrain) = median(each);
+      print_row(rows.back());
+    }
+    anchor.out = scratch / ("anchor-" + std::to_string(round));
+    AnchorSteps ref = run_anchor(anchor);
+    a.anchor = {median(ref.pretrain), median(ref.joint)};
+    std::cout << "NOVA code, round " << round << ": pretraining " << std::fixed << std::setprecision(3)
+              << a.anchor.pretrain << " s/step (" << ref.pretrain.size() << " timed), joint " << a.anchor.joint
+              << " s/step (" << ref.joint.size() << " timed, " << ref.joint_novel_view << " novel-view)";
+    if (!ref.end.empty())
+      std::cout << "; torch " << ref.end["torch"] << ", " << ref.end["threads"] << " threads, " << ref.end["device"];
+    std::cout << std::endl;
+    done.push_back(a);
+  }
+  print_anchor_comparison(done, std::cout);
+  std::ostringstream profiles;
+  if (profile_steps > 0) {
+    Runtime prt(rt.info(), true);
+    for (const bool joint : {false, true})
+      profiles << profile_of(prt, s, preset, name, joint, K, warmup, profile_steps, scratch / "profile");
+  }
+  std::cout << "\n" << anchor_csv(done) << profiles.str();
+  if (!o.str("out").empty()) {
+    const std::string out = o.str("out"), tmp = out + ".tmp";
+    std::ofstream(tmp) << anchor_csv(done);
+    fs::rename(tmp, out);
+    std::cout << "\nwrote " << out << "\n";
+  }
+  return 0;
+}
+
+// With --anchor DIR the options default to the NOVA code's scene, networks and a short run.
+std::map<std::string, std::string> step_defaults(const Args& args) {
+  std::map<std::string, std::string> d = {
+      {"scene", ""},        {"presets", "quick,reference"}, {"objects", "1,2"}, {"steps", "5"},
+      {"warmup", "2"},      {"profile-steps", "2"},         {"factor", "1"},    {"device", ""},
+      {"out", ""},          {"run", ""},                    {"torch", "auto"},  {"anchor", ""},
+      {"rounds", "2"},      {"anchor-python", "auto"}};
+  const auto a = std::find(args.begin(), args.end(), "--anchor");
+  if (a != args.end() && a + 1 != args.end()) {
+    d["scene"] = (fs::path(a[1]) / "data" / "Balloon1").string();
+    d["factor"] = "2";
+    d["presets"] = "reference";
+    d["objects"] = "1";
+    d["steps"] = "3";
+    d["warmup"] = "1";
+    d["torch"] = "off";  // the NOVA code is the PyTorch side here
+  }
+  return d;
+}
+
 }  // namespace
 
 int step(const Args& args) {
-  const Options o(args, {{"scene", ""}, {"presets", "quick,reference"}, {"objects", "1,2"}, {"steps", "5"},
-                         {"warmup", "2"}, {"profile-steps", "2"}, {"factor", "1"}, {"device", ""},
-                         {"out", ""}, {"run", ""}, {"torch", "auto"}});
+  const Options o(args, step_defaults(args));
   if (o.help()) {
     std::cout << o.usage("nova-bench step")
               << "\nSeconds per training step (occupancy skipping off: the dense step), device memory and peak\n"
@@ -221,12 +337,31 @@ int step(const Args& args) {
               << "--run RUN: continue a trained run instead (its config, weights, grids and phase; --scene\n"
                  "  defaults to the run's scene; --presets, --objects and --factor do not apply)\n"
               << "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path: each row's\n"
-                 "  MLPs alone (the preset's trunk at the step's rows of every NeRF) in PyTorch, alternating\n";
+                 "  MLPs alone (the preset's trunk at the step's rows of every NeRF) in PyTorch, alternating\n"
+              << "--anchor DIR: the NOVA code anchor (nova_ref: run.sh, data/Balloon1): --rounds times nova's\n"
+                 "  pretraining and joint steps, then the NOVA code's (--warmup + --steps of each phase, the\n"
+                 "  first --warmup left out), and the ratios NOVA code / nova. Defaults then: --scene\n"
+                 "  DIR/data/Balloon1 --factor 2 --presets reference --objects 1 --warmup 1 --steps 3 --torch off;\n"
+                 "  NOVA_PRE_STEPS, NOVA_JOINT_STEPS, NOVA_SUMMARY_SKIP, NOVA_NV_START, NOVA_THREADS and\n"
+                 "  NOVA_TIMEOUT in the environment override what the NOVA code is given\n"
+                 "--anchor-python: the NOVA code's interpreter (auto: $PYTHON, else /usr/bin/python3)\n";
     return 0;
   }
   const long steps = o.integer("steps"), warmup = o.integer("warmup"), profile_steps = o.integer("profile-steps");
   if (steps < 1 || warmup < 0 || profile_steps < 0) throw Error("--steps must be >= 1, --warmup and --profile-steps >= 0");
-  if (!o.str("run").empty()) return step_of_run(o, steps, warmup, profile_steps);
+  if (!o.str("run").empty()) {
+    if (!o.str("anchor").empty()) throw Error("--anchor steps on the NOVA code's scene from scratch: drop --run");
+    return step_of_run(o, steps, warmup, profile_steps);
+  }
+  const ScratchDir scratch("step");
+  AnchorRun anchor;
+  if (!o.str("anchor").empty()) {  // before any step: a wrong anchor is found at once
+    if (o.integer("rounds") < 1) throw Error("--rounds must be >= 1");
+    anchor.dir = fs::absolute(o.str("anchor"));
+    check_anchor_folder(anchor.dir);
+    anchor.python = anchor_python(o.str("anchor-python"));
+    check_anchor_python(anchor.python, scratch.path());
+  }
   if (o.str("scene").empty()) throw Error("--scene SCENE is required (e.g. the default synthetic scene of nova synth)");
   LoadOptions lo;
   lo.factor = static_cast<int>(o.integer("factor"));
@@ -242,8 +377,11 @@ int step(const Args& args) {
   const std::vector<std::string> preset_list = o.strings("presets");
   std::vector<TrainConfig> presets;
   for (const std::string& p : preset_list) presets.push_back(preset_config(p));
-
-  const ScratchDir scratch("step");
+  if (!o.str("anchor").empty()) {
+    if (presets.size() != 1 || objects.size() != 1)
+      throw Error("--anchor compares one preset and one object count (the NOVA code's: --presets reference --objects 1)");
+    return beside_anchor(o, scene, presets[0], preset_list[0], objects[0], warmup, steps, profile_steps, anchor, scratch);
+  }
 
   Runtime rt(select_device(o.str("device")), false);
   Runtime prt(rt.info(), true);  // a profiling runtime for the per-op tables
@@ -258,40 +396,12 @@ int step(const Args& args) {
     for (const bool joint : {false, true})
       for (int K : objects) {
         if (!joint && K != objects.front()) continue;  // pretraining has no object NeRFs
-        TrainConfig c = presets[pi];
-        c.occupancy = false;
-        const int total = static_cast<int>(warmup + std::max(steps, profile_steps));
-        c.pretrain_steps = joint ? 0 : total;
-        c.steps = joint ? total : 0;
-        c.log_every = 1000000;
-        c.checkpoint_every = 1000000;
         const Scene s = with_objects(scene, K);
-        Row r;
-        r.preset = preset_list[pi];
-        r.phase = joint ? "joint" : "pretrain";
-        r.objects = joint ? K : 0;
-        r.rays = c.rays;
-        r.samples = c.samples;
-        {
-          std::string why;
-          auto peer = torch_for(python, c, 1 + r.objects, why);
-          if (!peer && !told_torch) std::cout << "PyTorch: not compared (" << why << ")\n";
-          told_torch = true;
-          TrainConfig timed = c;
-          if (peer) timed.log_every = 1;  // a report after every step, where PyTorch takes its turn
-          Trainer t(rt, s, timed, (scratch / "run").string());
-          r.seconds = time_steps(rt, t, warmup, steps, peer.get(), &r.torch_seconds);
-          r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
-        }
-        r.rss_mb = peak_rss_mb();
-        if (profile_steps > 0) {
-          Trainer t(prt, s, c, (scratch / "profile").string());
-          t.set_profile(true);
-          profiles << "\n" << r.preset << " " << r.phase << (joint ? " K=" + std::to_string(K) : std::string())
-                   << " (" << profile_steps << " profiled steps)\n" << profiled_steps(t, warmup, profile_steps);
-        }
-        rows.push_back(r);
-        print_row(r);
+        rows.push_back(time_row(rt, s, presets[pi], preset_list[pi], joint, K, warmup, steps, scratch / "run", python,
+                                told_torch));
+        if (profile_steps > 0)
+          profiles << profile_of(prt, s, presets[pi], preset_list[pi], joint, K, warmup, profile_steps, scratch / "profile");
+        print_row(rows.back());
       }
   write_csv(rows, o.str("out"), profiles.str());
   return 0;
