@@ -86,13 +86,29 @@ BOOST_AUTO_TEST_CASE(an_open_window_is_the_field_and_a_shut_one_sees_no_position
   BOOST_TEST(varies);
 }
 
-BOOST_AUTO_TEST_CASE(option_needs_a_hash_grid) {
+// The joint step graph takes the window only for a rigid hash-grid field: the frequency
+// encoding has no levels, and the (x, y, z, t) field no motion to align.
+BOOST_AUTO_TEST_CASE(joint_graph_takes_the_window_for_a_rigid_hash_grid) {
+  RayGeometry geo;
+  geo.num_objects = 2;
+  geo.frames = 6;
   TrainConfig c = preset_config("quick");
-  set_config_value(c, "object-motion", "rigid");
-  set_config_value(c, "canonical-coarse-to-fine", "500");
-  BOOST_CHECK_NO_THROW(validate(c));
-  set_config_value(c, "encoding", "frequency");
-  BOOST_CHECK_THROW(validate(c), Error);
+  c.rays = 8;
+  c.samples = 4;
+  BOOST_REQUIRE(c.canonical_coarse_to_fine > 0);
+  BOOST_REQUIRE(c.field.motion == ObjectMotion::Rigid);
+  const auto joint = build_joint_graph(c, geo);
+  BOOST_REQUIRE(joint->level_window.valid());
+  BOOST_TEST(joint->level_window.shape().numel() == static_cast<size_t>(c.field.hash.outputs()));
+  TrainConfig frequency = c;
+  set_config_value(frequency, "encoding", "frequency");
+  BOOST_CHECK_NO_THROW(validate(frequency));
+  BOOST_TEST(!build_joint_graph(frequency, geo)->level_window.valid());
+  TrainConfig paper_field = c;
+  set_config_value(paper_field, "object-motion", "none");
+  BOOST_TEST(!build_joint_graph(paper_field, geo)->level_window.valid());
+  set_config_value(c, "canonical-coarse-to-fine", "0");
+  BOOST_TEST(!build_joint_graph(c, geo)->level_window.valid());
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -78,6 +78,7 @@ BOOST_AUTO_TEST_CASE(option_is_checked_against_the_coarsest_level) {
   BOOST_TEST(preset_config("reference").field.object_max_resolution == 0);
   TrainConfig c = preset_config("quick");
   BOOST_TEST(c.field.object_max_resolution == 32);
+  set_config_value(c, "object-motion", "none");  // the (x, y, z, t) field's grid
   set_config_value(c, "hash-object-max-res", "128");
   BOOST_TEST(c.field.object_max_resolution == 128);
   validate(c);

@@ -67,6 +67,20 @@ TrainConfig preset_config(const std::string& name) {
   // seed ahead inside the objects against 32 (camera 0 +0.27 to +0.54 dB, held-out cameras
   // +0.10 to +0.79); nvidia_balloon1, whose objects are not rigid, loses 0.45 (docs/accuracy.md).
   c.field.canonical_max_resolution = 128;
+  // Objects are rigid shapes moved by a learned motion: one shape that every frame's camera
+  // trains, with a colour that may change as the object turns under the scene's light, a
+  // trajectory kept smooth (second differences) and a canonical grid whose levels open from
+  // coarse to fine over the first 800 joint steps, so the motion first aligns coarse shapes.
+  // Against the (x, y, z, t) field on the dev seeds: inside the objects +2.06 dB from camera
+  // 0 and +3.49 from the held-out cameras, whole frame +0.73, compositions +0.50;
+  // nvidia_balloon1 (held-out frames) +0.60 inside its masks, +0.24 whole frame
+  // (docs/accuracy.md, "Rigid objects"). The test seeds, reported only: inside the objects
+  // +1.43 and +2.10, whole frame -0.39 and +0.16, compositions -1.87 (a turning rod whose
+  // canonical shape fans out, docs/known-issues.md).
+  c.field.motion = ObjectMotion::Rigid;
+  c.field.canonical_colour_time_freqs = 4;
+  c.w_motion_smooth = 1.0f;
+  c.canonical_coarse_to_fine = 800;
   c.augment_start = 200;
   // Every second joint step augmented (the reference: every third). Chosen on the family's dev
   // seeds (camera 0 +0.18 dB, composition +0.22 on average) and confirmed on the test seeds

@@ -116,7 +116,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
   if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
   if (field.motion == ObjectMotion::Rigid) s->motion = motion_parameter(g, K, motion_options(geo).frames);
-  if (field.motion == ObjectMotion::Rigid && c.canonical_coarse_to_fine > 0)
+  if (field.motion == ObjectMotion::Rigid && field.encoding == Encoding::HashGrid && c.canonical_coarse_to_fine > 0)
     s->level_window = g.input("level_window", Shape{static_cast<size_t>(field.hash.outputs())});
   Tensor raw_objects = object_raw(smp.positions[1], s->times, field, geo, s->pack_objects, s->motion, s->level_window);
   Tensor raw = stack({raw_static, raw_objects});

@@ -235,7 +235,7 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "none";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
-  o.push_back(int_option("canonical-coarse-to-fine", "object-motion rigid, hash grid: joint steps over which the canonical grid's levels open from coarse to fine, so the motion aligns coarse shapes first (0: every level from the start)", 0, kBig,
+  o.push_back(int_option("canonical-coarse-to-fine", "object-motion rigid, hash grid (unused with the frequency encoding): joint steps over which the canonical grid's levels open from coarse to fine, so the motion aligns coarse shapes first (0: every level from the start)", 0, kBig,
                          [](TrainConfig& c) -> int& { return c.canonical_coarse_to_fine; }));
   o.back().before = "0";
   o.push_back(float_option("lr-motion", "object-motion rigid: the trajectories' learning rate as a fraction of lr (0: kept where the frames' alignment put them)", 0.0, 1.0,
@@ -315,9 +315,6 @@ void validate(const TrainConfig& c) {
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");
   if (c.pretrain_steps + static_cast<long>(c.steps) <= 0)
     throw Error("options 'pretrain-steps' and 'steps': both are 0, nothing to train");
-  if (c.canonical_coarse_to_fine > 0 && c.field.encoding != Encoding::HashGrid)
-    throw Error("option 'canonical-coarse-to-fine': opens a hash grid's levels, but 'encoding' is " +
-                std::string(encoding_name(c.field.encoding)));
 }
 
 }  // namespace nova

@@ -61,7 +61,7 @@ struct TrainConfig : ModelConfig {
   // alignment, and at the networks' rate they wander to explain what the fields miss.
   float lr_motion = 0.1f;
   // Joint steps over which a rigid object's canonical hash grid opens its levels from coarse to
-  // fine (0: every level from the start): a shape of coarse levels only changes smoothly with
+  // fine (0: every level from the start; unused with the frequency encoding): a shape of coarse levels only changes smoothly with
   // the motion, so the trajectory first aligns the frames on what those levels see.
   int canonical_coarse_to_fine = 0;
   // Empty-space skipping (occupancy.hpp; on with ModelConfig::occupancy): one grid per NeRF,
