@@ -48,6 +48,7 @@ double joint_gradient_mass(bool gate, const std::vector<float>& masks, const std
   ex.set(s->times, std::vector<float>(2, 0.25f));
   ex.set(s->target_rgb, random_floats(R * 3, 0, 1, 12));
   ex.set(s->target_masks, masks);
+  if (s->level_window.valid()) ex.set(s->level_window, std::vector<float>(s->level_window.shape().numel(), 1.0f));
   ex.forward();
   ex.backward();
   double mass = 0;
