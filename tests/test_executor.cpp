@@ -69,6 +69,23 @@ BOOST_AUTO_TEST_CASE(an_input_treated_as_constant_starts_no_backward) {
   for (size_t i = 0; i < 4; ++i) BOOST_TEST(dx[i] == 0.5f * xv[i], boost::test_tools::tolerance(1e-6f));
 }
 
+// An input never set would be read as what its arena held before (another run's tensors);
+// forward() refuses it and names it.
+BOOST_AUTO_TEST_CASE(an_input_never_set_is_refused) {
+  Graph g;
+  const SmallMlp m = small_mlp(g, 8, 2, 1, 8, -1);
+  Executor ex(test::runtime(), g);
+  ex.set(m.x, std::vector<float>(8 * 3, 0.5f));
+  try {
+    ex.forward();
+    BOOST_FAIL("forward() ran with the input 'target' never set");
+  } catch (const Error& e) {
+    BOOST_TEST(std::string(e.what()).find("'target' was never set") != std::string::npos, e.what());
+  }
+  ex.set(m.target, std::vector<float>(8 * 4, 0.0f));
+  BOOST_CHECK_NO_THROW(ex.forward());
+}
+
 BOOST_AUTO_TEST_CASE(plan_never_overlaps_live_tensors) {
   std::mt19937 rng(3);
   for (int trial = 0; trial < 50; ++trial) {

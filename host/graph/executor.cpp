@@ -344,6 +344,10 @@ void Executor::run_pass(const std::vector<int>& nodes, Pass pass) {
 }
 
 void Executor::forward() {
+  input_given_.resize(graph_.tensor_count(), false);
+  for (size_t t = 0; t < graph_.tensor_count(); ++t)
+    if (graph_.tensor(t).role == TensorRole::Input && !input_given_[t])
+      throw Error("forward(): input '" + graph_.tensor(t).name + "' was never set", kExitInternal);
   if (options_.check_finite)
     for (size_t t = 0; t < graph_.tensor_count(); ++t)
       if (graph_.tensor(t).role == TensorRole::Input) {
@@ -428,6 +432,12 @@ void Executor::set(Tensor t, const float* values, size_t count) {
   // In queue order, without waiting for the device: the host prepares the next step's data
   // while the current one runs.
   rt_.upload_async(values_[t.id].get(), values, count * sizeof(float));
+  mark_given(t.id);
+}
+
+void Executor::mark_given(TensorId t) const {
+  input_given_.resize(graph_.tensor_count(), false);
+  input_given_[t] = true;
 }
 
 void Executor::set(Tensor t, const std::vector<float>& values) {
@@ -452,7 +462,10 @@ std::vector<float> Executor::get_grad(Tensor t) {
   return rt_.download_floats(grads_[t.id].get(), info.shape.numel());
 }
 
-cl_mem Executor::buffer(Tensor t) const { return values_.at(t.id).get(); }
+cl_mem Executor::buffer(Tensor t) const {
+  mark_given(t.id);  // the caller writes it (or reads it: then it was given before)
+  return values_.at(t.id).get();
+}
 cl_mem Executor::grad_buffer(Tensor t) const {
   return has_grad_.at(t.id) || graph_.tensor(t.id).role == TensorRole::Parameter
              ? grads_.at(t.id).get()

@@ -144,6 +144,10 @@ class Executor {
   std::vector<Buffer> fwd_workspace_, bwd_workspace_;  // per node
   MemoryPlan plan_;
   bool forward_done_ = false;
+  // Per tensor: an input whose values were given (set(), or its buffer handed out to be
+  // written). An input never given would be read as whatever its arena held before.
+  mutable std::vector<bool> input_given_;
+  void mark_given(TensorId t) const;
   enum GuardedArena { kActivationArena, kParameterArena, kGradientArena };
   struct Guard {
     size_t offset, bytes;  // in its arena
