@@ -6,6 +6,7 @@
 #include <set>
 #include <string>
 
+#include "field_test_util.hpp"
 #include "harness.hpp"
 #include "nova/graph/executor.hpp"
 #include "nova/model/fields.hpp"
@@ -18,17 +19,7 @@ using namespace nova::test;
 namespace {
 
 FieldConfig rigid_field(int time_freqs) {
-  FieldConfig f;
-  f.encoding = Encoding::HashGrid;
-  f.hash.levels = 4;
-  f.hash.log2_size = 10;
-  f.hash.min_resolution = 4;
-  f.hash.max_resolution = 32;
-  f.hash.bound = 1.0f;
-  f.depth = 1;
-  f.width = 8;
-  f.skip = -1;
-  f.motion = ObjectMotion::Rigid;
+  FieldConfig f = small_hash_field(32, ObjectMotion::Rigid);
   f.canonical_colour_time_freqs = time_freqs;
   return f;
 }

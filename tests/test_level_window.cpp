@@ -3,6 +3,7 @@
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 
+#include "field_test_util.hpp"
 #include "harness.hpp"
 #include "nova/graph/executor.hpp"
 #include "nova/model/fields.hpp"
@@ -15,20 +16,7 @@ using namespace nova::test;
 
 namespace {
 
-FieldConfig canonical_field() {
-  FieldConfig f;
-  f.encoding = Encoding::HashGrid;
-  f.hash.levels = 4;
-  f.hash.log2_size = 10;
-  f.hash.min_resolution = 4;
-  f.hash.max_resolution = 32;
-  f.hash.bound = 1.0f;
-  f.depth = 1;
-  f.width = 8;
-  f.skip = -1;
-  f.motion = ObjectMotion::Rigid;
-  return f;
-}
+FieldConfig canonical_field() { return small_hash_field(32, ObjectMotion::Rigid); }
 
 // One object's field at 40 fixed canonical points, every parameter from one seed, the
 // encoding scaled by `window` (none when empty).

@@ -4,6 +4,7 @@
 #include <boost/test/unit_test.hpp>
 #include <string>
 
+#include "field_test_util.hpp"
 #include "harness.hpp"
 #include "nova/runtime/error.hpp"
 #include "nova/graph/executor.hpp"
@@ -14,20 +15,6 @@ using namespace nova;
 using namespace nova::test;
 
 namespace {
-
-FieldConfig small_hash_field() {
-  FieldConfig f;
-  f.encoding = Encoding::HashGrid;
-  f.hash.levels = 4;
-  f.hash.log2_size = 10;
-  f.hash.min_resolution = 4;
-  f.hash.max_resolution = 64;
-  f.hash.bound = 1.0f;  // as scene_field resolves it for an NDC scene
-  f.depth = 1;
-  f.width = 8;
-  f.skip = -1;
-  return f;
-}
 
 // A field's output for fixed inputs with every parameter set from one seed (tables in +-1,
 // so the encoding dominates the output).
@@ -54,7 +41,7 @@ std::vector<float> field_output(const FieldConfig& f, bool object) {
 BOOST_AUTO_TEST_SUITE(object_grid)
 
 BOOST_AUTO_TEST_CASE(object_fields_use_their_own_finest_level) {
-  FieldConfig fine = small_hash_field();
+  FieldConfig fine = small_hash_field(64);
   FieldConfig coarse_objects = fine;
   coarse_objects.object_max_resolution = 16;
   FieldConfig coarse_everywhere = fine;
@@ -95,7 +82,7 @@ BOOST_AUTO_TEST_CASE(option_is_checked_against_the_coarsest_level) {
 // hash-object-max-res whatever it says, and 0 falls back to hash-object-max-res (what a run
 // written before the option meant).
 BOOST_AUTO_TEST_CASE(canonical_fields_use_their_own_finest_level) {
-  FieldConfig f = small_hash_field();
+  FieldConfig f = small_hash_field(64);
   f.object_max_resolution = 16;
   f.canonical_max_resolution = 32;
   BOOST_TEST(object_hash_config(f).max_resolution == 16);
