@@ -112,7 +112,7 @@ void check_learns_the_tiny_scene(const TrainConfig& c) {
   // networks score below it (measured 14.3 dB against a 16.0 dB baseline). In 400 steps
   // the paper's networks reach 17.00 dB and rigid objects on hash grids 17.92-18.00 under
   // the five BLAS kernels above; the floor is baseline + 0.5 (16.47). Rigid objects on the
-  // paper's frequency encoding reach only 15.38-16.49 here (docs/known-issues.md), so the
+  // paper's frequency encoding reach only 15.64-16.49 here (docs/known-issues.md), so the
   // paper's networks are checked with the (x, y, z, t) field they were made for.
   const Checkpoint ck = t.checkpoint();
   ViewRenderer r(runtime(), c, ray_geometry(scene), ck);
