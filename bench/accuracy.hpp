@@ -21,13 +21,16 @@ namespace nova::accuracy {
 // look better: add a new set instead.
 inline const std::vector<uint32_t> kDevSeeds = {1, 2, 3, 4};
 inline const std::vector<uint32_t> kTestSeeds = {101, 102, 103, 104};
+// The sets a scene can belong to (SceneSpec::set), in the order tables and plots show them.
+inline const std::vector<std::string> kSetOrder = {"dev", "test", "deforming", "real", "other"};
 // The real scenes of the shared data folder, in the order the set `real` lists them.
 inline const std::vector<std::string> kRealScenes = {"balloon", "fern", "lego"};
 
 // One scene to train and score, with the protocol it is evaluated under.
 struct SceneSpec {
   std::string name;  // canonical: family:S, synth:PRESET:S, balloon, fern, lego
-  std::string set;   // dev, test, real, or other (a synthetic scene in neither seed list)
+  std::string set;   // dev, test, deforming (synth:deforming:S), real, or other (a synthetic
+                     // scene in none of those)
   bool synthetic = false;
   std::string preset;  // synthetic: the nova synth preset
   uint32_t seed = 0;   // synthetic: its seed
@@ -47,7 +50,7 @@ std::string set_of_seed(uint32_t seed);
 uint32_t parse_seed(const std::string& text, const std::string& scene);
 
 constexpr const char* kSceneSyntax =
-    "a set (dev, test, real, all), family:SEED, synth:PRESET:SEED, balloon, fern or lego";
+    "a set (dev, test, deforming, real, all), family:SEED, synth:PRESET:SEED, balloon, fern or lego";
 
 // One scene name (no set). Error (exit 2) naming it when it is none of kSceneSyntax.
 SceneSpec parse_scene(const std::string& text);

@@ -45,6 +45,7 @@ constexpr const char* kUsage =
     "  --scenes LIST   comma list of sets and scenes (default dev):\n"
     "                    dev = family:1..4 (for choosing methods and defaults),\n"
     "                    test = family:101..104 (only reported, never tuned on),\n"
+    "                    deforming = synth:deforming:101..104 (the test worlds, objects changing shape; reported)\n"
     "                    real = balloon, fern, lego;  all = dev + test + real\n"
     "                    family:SEED        the seeded synthetic family (nova synth --preset family)\n"
     "                    synth:PRESET:SEED  another nova synth scene (synth:tiny:0, synth:default:0)\n"
@@ -238,7 +239,7 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
 Image8 results_plot(const std::vector<SceneResult>& results, const std::string& config_text) {
   std::vector<BarGroup> bars, object_bars;
   std::vector<ScatterGroup> points;
-  for (const std::string set : {"dev", "test", "real", "other"}) {
+  for (const std::string& set : kSetOrder) {
     BarGroup g{set, {}}, go{set, {}};
     ScatterGroup s{set, {}, {}};
     for (const SceneResult& r : results) {

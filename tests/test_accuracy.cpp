@@ -79,6 +79,11 @@ BOOST_AUTO_TEST_CASE(scene_lists_expand_sets_and_drop_duplicates) {
   BOOST_TEST(parse_scene("family:104").set == "test");
   BOOST_TEST(parse_scene("family:7").set == "other");
   BOOST_TEST(parse_scene("synth:default:1").set == "other");
+  BOOST_TEST(parse_scene("synth:deforming:101").set == "deforming");
+  BOOST_TEST(names(parse_scene_list("deforming")) ==
+                 (std::vector<std::string>{"synth:deforming:101", "synth:deforming:102", "synth:deforming:103",
+                                           "synth:deforming:104"}),
+             boost::test_tools::per_element());
   const SceneSpec f = parse_scene("family:101");
   BOOST_TEST(f.synthetic);
   BOOST_TEST(f.preset == "family");

@@ -16,12 +16,13 @@ int synth(const Args& args) {
       "preset", po::value<std::string>()->default_value("default"),
       "tiny (tests: 10 frames, 64x48) | default (demo: 24 frames, 160x120) | family (the "
       "seed draws a whole scene: 1-3 objects, shapes, motion, camera path, size, "
-      "imperfect training inputs)")(
+      "imperfect training inputs) | deforming (the family's scene of the seed, its objects "
+      "also squashing and stretching)")(
       "seed", po::value<long long>()->default_value(0), "seed in [0, 4294967295]: same seed, same bytes")(
       "force", po::bool_switch(), "replace an existing output folder");
   po::variables_map vm;
   if (!parse(args, desc, vm,
-             "usage: nova synth --out DIR [--preset tiny|default|family] [--seed S] [--force]"))
+             "usage: nova synth --out DIR [--preset tiny|default|family|deforming] [--seed S] [--force]"))
     return 0;
   const long long seed = vm["seed"].as<long long>();
   if (seed < 0 || seed > 4294967295LL) throw Error("--seed " + std::to_string(seed) + " is outside [0, 4294967295]");

@@ -284,6 +284,23 @@ SynthScene draw_family_scene(uint32_t seed) {
   return s;
 }
 
+SynthScene draw_deforming_scene(uint32_t seed) {
+  SynthScene s = draw_family_scene(seed);
+  s.preset.name = "deforming";
+  // A stream of its own (the seed's bits mixed with a constant), so that the family's draws
+  // stay as they are.
+  Draw g(seed ^ 0x9e3779b9u);
+  for (SynthObject& obj : s.objects) {
+    SynthMotion& m = obj.motion;
+    const int axis = g.integer(0, 2);
+    const double amplitude = g.uniform(0.25, 0.45);
+    for (int a = 0; a < 3; ++a) m.stretch[size_t(a)] = a == axis ? amplitude : -0.5 * amplitude;
+    m.stretch_rate = g.uniform(0.75, 1.5);
+    m.stretch_phase = g.unit();
+  }
+  return s;
+}
+
 std::string describe_synth_scene(const SynthScene& s) {
   std::ostringstream o;
   o.precision(4);
@@ -325,7 +342,11 @@ std::string describe_synth_scene(const SynthScene& s) {
     if (m.kind == SynthMotionKind::bezier || m.kind == SynthMotionKind::sinusoid)
       o << " from (" << c0[0] << "," << c0[1] << "," << c0[2] << ") to (" << m.p2[0] << ","
         << m.p2[1] << "," << m.p2[2] << "), depth ratio " << -c0[2] / -bg.wall_z;
-    o << ", spin " << m.spin_rate << " rad\n";
+    o << ", spin " << m.spin_rate << " rad";
+    if (m.stretch[0] != 0 || m.stretch[1] != 0 || m.stretch[2] != 0)
+      o << ", stretch (" << m.stretch[0] << "," << m.stretch[1] << "," << m.stretch[2] << ") x "
+        << m.stretch_rate << " cycles";
+    o << "\n";
   }
   const auto& imp = s.imperfections;
   o << "imperfections";

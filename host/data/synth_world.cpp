@@ -203,14 +203,14 @@ V3 motion_centre(const SynthMotion& m, double u) {
 }  // namespace
 
 void check_synth_preset(const std::string& name) {
-  if (name != "tiny" && name != "default" && name != "family")
-    throw Error("unknown synthetic preset '" + name + "' (use tiny, default or family)");
+  if (name != "tiny" && name != "default" && name != "family" && name != "deforming")
+    throw Error("unknown synthetic preset '" + name + "' (use tiny, default, family or deforming)");
 }
 
 SynthPreset synth_preset(const std::string& name) {
   check_synth_preset(name);
-  if (name == "family")
-    throw Error("synthetic preset 'family' draws its size from the seed: use synth_scene");
+  if (name == "family" || name == "deforming")
+    throw Error("synthetic preset '" + name + "' draws its size from the seed: use synth_scene");
   SynthPreset p;
   p.name = name;
   if (name == "tiny") {
@@ -253,6 +253,7 @@ const char* synth_camera_name(SynthCameraKind kind) {
 
 SynthScene synth_scene(const std::string& preset, uint32_t seed) {
   if (preset == "family") return draw_family_scene(seed);
+  if (preset == "deforming") return draw_deforming_scene(seed);
   return fixed_scene(preset, seed);
 }
 
@@ -288,9 +289,18 @@ Pose34 SynthWorld::object_pose(int object, double time) const {
   return axis_angle_pose(m.spin_axis, m.spin_rate * u + 2 * kPi * m.spin_phase, motion_centre(m, u));
 }
 
+SynthVec SynthWorld::object_stretch(int object, double time) const {
+  const Pose34 check = object_pose(object, time);  // names a missing object
+  (void)check;
+  const SynthMotion& m = scene_.objects[size_t(object - 1)].motion;
+  const double u = 0.5 * (time + 1.0);
+  const double wave = std::sin(2 * kPi * (m.stretch_rate * u + m.stretch_phase));
+  return {1 + m.stretch[0] * wave, 1 + m.stretch[1] * wave, 1 + m.stretch[2] * wave};
+}
+
 SynthRender SynthWorld::render(const Camera& camera, double time) const {
   std::vector<SynthInstance> inst;
-  for (int k = 1; k <= objects(); ++k) inst.push_back({k, object_pose(k, time)});
+  for (int k = 1; k <= objects(); ++k) inst.push_back({k, object_pose(k, time), object_stretch(k, time)});
   return render_instances(camera, true, inst);
 }
 
@@ -349,14 +359,24 @@ SynthRender SynthWorld::render_instances(const Camera& cam, bool background,
 
       for (const auto& inst : instances) {
         const SynthObject& obj = scene_.objects[size_t(inst.object - 1)];
-        const V3 ol = to_local_point(inst.pose, o), dl = to_local_dir(inst.pose, d);
+        // A stretched shape is the drawn one in axes scaled by 1 / stretch: the ray is mapped
+        // there (an affine map keeps its parameter t), the texture stays on the material and
+        // the normal takes the inverse transpose, diag(1 / stretch).
+        const V3 s = inst.stretch;
+        const bool stretched = s[0] != 1 || s[1] != 1 || s[2] != 1;
+        V3 ol = to_local_point(inst.pose, o), dl = to_local_dir(inst.pose, d);
+        if (stretched) {
+          ol = {ol[0] / s[0], ol[1] / s[1], ol[2] / s[2]};
+          dl = {dl[0] / s[0], dl[1] / s[1], dl[2] / s[2]};
+        }
         const ShapeHit h = intersect_shape(obj.shape, ol, dl);
         if (h.t > 0 && h.t < best) {
           const V3 p = add(ol, mul(dl, h.t));
           const V3 nl = shape_normal(obj.shape, p, h.part);
+          const V3 ns = stretched ? normalize({nl[0] / s[0], nl[1] / s[1], nl[2] / s[2]}) : nl;
           best = h.t;
           owner = inst.object;
-          colour = mul(albedo(obj.texture, p, nl, obj.shape.size[0]), shade(to_world_dir(inst.pose, nl)));
+          colour = mul(albedo(obj.texture, p, nl, obj.shape.size[0]), shade(to_world_dir(inst.pose, ns)));
         }
       }
 

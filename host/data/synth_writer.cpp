@@ -181,7 +181,8 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
   for (const auto& t : spec.targets) {
     std::vector<SynthInstance> inst;
     for (const auto& i : t.instances)
-      inst.push_back({i.object, pose_multiply(raw_instance_map(i, a), world.object_pose(i.object, i.time))});
+      inst.push_back({i.object, pose_multiply(raw_instance_map(i, a), world.object_pose(i.object, i.time)),
+                      world.object_stretch(i.object, i.time)});
     const SynthRender r = world.render_instances(world.camera(t.camera), t.background, inst);
     const std::string rel = "compose/" + t.name + ".png";
     write_png((root / "gt" / rel).string(), r.rgb);
@@ -194,7 +195,7 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
        << "\nobjects " << k_objects
        << "\ntime frame i of N: t = 2 i / N - 1\n";
   // The fixed presets' synth.txt stays as it always was; a family scene says what was drawn.
-  if (p.name == "family") info << describe_synth_scene(world.scene());
+  if (p.name == "family" || p.name == "deforming") info << describe_synth_scene(world.scene());
   write_text(root / "synth.txt", info.str());
   staged.commit();
 

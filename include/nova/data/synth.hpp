@@ -30,6 +30,12 @@
 //     dilated by 1-3 px and/or with jagged borders; disparity right only up to an affine map
 //     (scale, shift) and blurred (Gaussian), as from a monocular depth network; a per-frame
 //     exposure gain of a few percent. Which apply is drawn too; about a quarter are clean.
+// - "deforming": the family's scene of the same seed, whose objects also change shape: each
+//   squashes and stretches along one of its own axes (by 25-45 %, the other two axes the
+//   opposite way by half as much, 0.75-1.5 cycles over the video), as a bouncing ball or a
+//   breathing balloon does. Drawn from a stream of its own, so every other draw, and every
+//   frame without the objects, is the family scene's: the two measure what a change of
+//   shape costs a model.
 //
 // `nova synth --out DIR` writes the NOVA layout:
 //   images/NNN.png, poses_bounds.npy (N x 17, float64), motion_masks/{0..K}/NNN.png,
@@ -58,9 +64,11 @@ struct SynthPreset {
   int heldout_cameras = 2;
 };
 
-// "tiny" or "default" (fixed sizes); "family" draws its size from the seed (SynthScene).
+// "tiny" or "default" (fixed sizes); "family" and "deforming" draw their size from the seed
+// (SynthScene).
 SynthPreset synth_preset(const std::string& name);
-// Throws the error an unknown preset name gets; "tiny", "default" and "family" pass.
+// Throws the error an unknown preset name gets; "tiny", "default", "family" and "deforming"
+// pass.
 void check_synth_preset(const std::string& name);
 
 // A shape in its own frame, centred at the origin. `size` per kind:
@@ -108,6 +116,10 @@ struct SynthMotion {
   std::array<double, 2> phase{};
   SynthVec spin_axis{0, 1, 0};
   double spin_rate = 0, spin_phase = 0;
+  // A change of shape ("deforming"): the shape's own axes scaled by 1 + stretch[a] sin(2 pi
+  // (stretch_rate u + stretch_phase)) before the pose (all 0: rigid).
+  SynthVec stretch{};
+  double stretch_rate = 0, stretch_phase = 0;
 };
 
 struct SynthObject {
@@ -164,10 +176,12 @@ struct SynthScene {
   SynthVec compose_shift{0.5, 0.35, 0}, compose_copy_shift{0, 0.45, 0.3};
 };
 
-// The scene of a preset and seed ("tiny", "default" or "family").
+// The scene of a preset and seed ("tiny", "default", "family" or "deforming").
 SynthScene synth_scene(const std::string& preset, uint32_t seed);
 // The family's sampler (synth_family.cpp).
 SynthScene draw_family_scene(uint32_t seed);
+// The family's scene of `seed` with objects that change shape (the "deforming" preset).
+SynthScene draw_deforming_scene(uint32_t seed);
 // The scene in words: shapes, textures, motions, camera path, size, imperfections.
 std::string describe_synth_scene(const SynthScene& scene);
 
@@ -185,10 +199,12 @@ struct SynthRender {
   ImageF depth;
 };
 
-// An object instance to draw: object k (1..K) with an object-to-world pose.
+// An object instance to draw: object k (1..K) with an object-to-world pose, its shape's own
+// axes scaled by `stretch` first (SynthWorld::object_stretch; 1, 1, 1: as drawn).
 struct SynthInstance {
   int object = 1;
   Pose34 pose{};
+  SynthVec stretch{1, 1, 1};
 };
 
 class SynthWorld {
@@ -202,6 +218,7 @@ class SynthWorld {
   Camera camera(int frame) const;         // training camera of frame i (raw world)
   Camera heldout_camera(int index) const; // 1..heldout_cameras
   Pose34 object_pose(int object, double time) const;  // object-to-world at time t
+  SynthVec object_stretch(int object, double time) const;  // its shape's axis scales at time t
 
   // The scene at time t as the camera sees it.
   SynthRender render(const Camera& camera, double time) const;
