@@ -354,7 +354,7 @@ int accuracy(const Args& raw_args) {
   std::cout << "nova-bench accuracy: " << plan.size() << " scene" << (plan.size() > 1 ? "s" : "") << ", " << config_text
             << ", device " << device.name << "\n";
   for (const Planned& p : plan) {
-    std::cout << "  " << std::left << std::setw(18) << p.spec.name << std::setw(7) << p.spec.set << p.source << ", "
+    std::cout << "  " << std::left << std::setw(20) << p.spec.name << " " << std::setw(10) << p.spec.set << " " << p.source << ", "
               << p.config.pretrain_steps << " + " << p.config.steps << " steps";
     for (const auto& [k, v] : p.spec.protocol) std::cout << ", --" << k << " " << v;
     if (!p.spec.eval_split.empty()) std::cout << ", scored on its " << p.spec.eval_split << " split";

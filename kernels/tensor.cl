@@ -48,3 +48,27 @@ __kernel void scale_cols(__global const float* x, __global const float* w, __glo
   const float v = x[i] * w[i % cols];
   y[i] = accumulate ? y[i] + v : v;
 }
+
+// out = y + bound tanh(raw): a position moved by a bounded learned offset (a deformation that
+// cannot leave the neighbourhood of the rigid motion's point).
+__kernel void bounded_offset(__global const float* y, __global const float* raw, __global float* out,
+                             uint n, float bound) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  out[i] = y[i] + bound * tanh(raw[i]);
+}
+
+// Its backward: dy (+)= dout; draw (+)= dout bound (1 - tanh^2 raw).
+__kernel void bounded_offset_back(__global const float* raw, __global const float* dout, __global float* dy,
+                                  __global float* draw, uint n, float bound, int has_dy, int acc_dy,
+                                  int has_draw, int acc_draw) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  const float g = dout[i];
+  if (has_dy) dy[i] = acc_dy ? dy[i] + g : g;
+  if (has_draw) {
+    const float t = tanh(raw[i]);
+    const float v = g * bound * (1.0f - t * t);
+    draw[i] = acc_draw ? draw[i] + v : v;
+  }
+}

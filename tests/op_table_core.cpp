@@ -1,5 +1,5 @@
 // The op table's tensor and layer ops: positional_encoding, bias_act, linear, dense, concat,
-// gradient_gate, repeat_rows, scale_columns and the random draws. The 1009-row shapes are the odd-size sweep
+// gradient_gate, repeat_rows, scale_columns, bounded_offset and the random draws. The 1009-row shapes are the odd-size sweep
 // (several work-groups and a partial last one); the 1-row ones a single, partial group.
 #include <algorithm>
 #include <cmath>
@@ -398,6 +398,42 @@ OpEntry scale_columns_entry() {
   return e;
 }
 
+OpEntry bounded_offset_entry() {
+  OpEntry e;
+  e.name = "bounded_offset";
+  // dims: rows M, batches B (y and raw [M, 3] for B = 1, else [B, M, 3]); the bound is 0.05.
+  e.shapes = {{{kOddRows, 1}, 0, "1009 x 3"}, {{1, 1}, 0, "1 x 3"}, {{13, 3}, 0, "[3, 13, 3]"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    const Shape ys = s.dims[1] == 1 ? Shape{s.dims[0], 3} : Shape{s.dims[1], s.dims[0], 3};
+    Tensor y = g.input("y", ys, true), raw = g.input("raw", ys, true);
+    return OpGraph{{y, raw}, {bounded_offset(y, raw, 0.05f)}, {}};
+  };
+  e.values = [](const OpShape& s) {
+    // raw over [-3, 3]: tanh's flat tails and its steep middle.
+    const size_t n = s.dims[0] * s.dims[1] * 3;
+    return std::vector<std::vector<float>>{random_floats(n, -1, 1, 131), random_floats(n, -3, 3, 132)};
+  };
+  // float32 tanh is within 4 ulp (OpenCL 1.2's bound for tanh), times 0.05, plus one rounded
+  // addition to y in [-1, 1]: 1e-7 absolute holds both.
+  e.reference = [](const OpCase& c) {
+    std::vector<double> ref;
+    for (size_t i = 0; i < c.values[0].size(); ++i) ref.push_back(double(c.values[0][i]) + 0.05 * std::tanh(double(c.values[1][i])));
+    return std::vector<Expected>{{ref, {1e-7, 0}}};
+  };
+  e.gradient = [](const OpCase& c) {
+    std::vector<double> dy, draw;
+    for (size_t i = 0; i < c.upstream[0].size(); ++i) {
+      const double t = std::tanh(double(c.values[1][i]));
+      dy.push_back(c.upstream[0][i]);
+      draw.push_back(c.upstream[0][i] * 0.05 * (1 - t * t));
+    }
+    return std::vector<Expected>{grad_expected(dy), grad_expected(draw)};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return 20.0 * double(s.dims[0] * s.dims[1] * 3); };
+  return e;
+}
+
 OpEntry random_entry(bool normal) {
   OpEntry e;
   e.name = normal ? "random_normal" : "random_uniform";
@@ -432,6 +468,7 @@ void register_core_ops(std::vector<OpEntry>& t) {
   t.push_back(gradient_gate_entry());
   t.push_back(repeat_rows_entry());
   t.push_back(scale_columns_entry());
+  t.push_back(bounded_offset_entry());
   t.push_back(random_entry(false));
   t.push_back(random_entry(true));
 }

@@ -129,6 +129,36 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   BOOST_TEST(read_all(dir / "pose_commas" / "000.png") == read_all(dir / "pose_groups" / "000.png"));
 }
 
+// Rigid objects that also deform: train, resume, render every frame and a composition, and
+// evaluate, all through the deformation network's parameters in the checkpoint.
+BOOST_AUTO_TEST_CASE(deforming_objects_train_resume_render_and_compose) {
+  if (!has_cli()) return;
+  TempDir dir("cli-deform");
+  const std::string scene = cached_tiny_scene().string(), run = (dir / "run").string();
+  const std::string deform = " --object-motion rigid --deform-width 8 --deform-bound 0.1";
+  Result t = nova_cli("train --scene " + scene + " --out " + run + kTiny + deform, dir);
+  BOOST_REQUIRE_MESSAGE(t.code == 0, t.err);
+  BOOST_TEST(read_all(dir / "run" / "config.ini").find("\ndeform-width = 8\n") != std::string::npos);
+  Result more = nova_cli("train --out " + run + " --resume --steps 9", dir);
+  BOOST_REQUIRE_MESSAGE(more.code == 0, more.err);
+  Result r = nova_cli("render --run " + run + " --out " + (dir / "frames").string() + " --no-masks", dir);
+  BOOST_REQUIRE_MESSAGE(r.code == 0, r.err);
+  BOOST_TEST(fs::exists(dir / "frames" / "009.png"));
+  write_all(dir / "spec.txt", "nova-compose 1\ntarget turned camera=0\ninstance object=1 time=0.3 rotate=0,30,0\n");
+  Result c = nova_cli("render --run " + run + " --out " + (dir / "comp").string() + " --compose " +
+                          (dir / "spec.txt").string(), dir);
+  BOOST_REQUIRE_MESSAGE(c.code == 0, c.err);
+  BOOST_TEST(fs::exists(dir / "comp" / "turned.png"));
+  Result e = nova_cli("eval --run " + run, dir);
+  BOOST_TEST(e.code == 0, e.err);
+  // Without the rigid model the option is refused before anything is written.
+  Result bad = nova_cli("train --scene " + scene + " --out " + (dir / "bad").string() + kTiny +
+                            " --object-motion none --deform-width 8", dir);
+  BOOST_TEST(bad.code == 2, bad.err);
+  BOOST_TEST(bad.err.find("deform-width") != std::string::npos, bad.err);
+  BOOST_TEST(!fs::exists(dir / "bad"));
+}
+
 // A run trained with --holdout still renders every frame of its scene folder: --camera and
 // the default times count the held-out frames too (10 frames, every 4th held out).
 BOOST_AUTO_TEST_CASE(render_counts_held_out_frames) {

@@ -31,6 +31,20 @@ Tensor encode(Tensor x, const FieldConfig& c, const HashGridConfig& hash, const 
   return hash_encoding(x, hash_grid_table(*x.graph, table_name, hash, networks), hash);
 }
 
+// A rigid object's deformation (FieldConfig::deform_width): canonical positions moved by a
+// small network of [PE(position), PE(time)], its offset bounded by deform_bound. The output
+// layer starts at zero, so training starts from the rigid shape.
+Tensor deform_positions(Tensor positions, Tensor times, const FieldConfig& c, int networks) {
+  Graph& g = *positions.graph;
+  Tensor in = concat({positional_encoding(positions, kDeformFrequencies), positional_encoding(times, kDeformFrequencies)});
+  Tensor hidden = dense_layer(in, c.deform_width, Activation::ReLU, "objects.deform.hidden", networks);
+  const bool batched = networks > 1;
+  const size_t W = static_cast<size_t>(c.deform_width), B = static_cast<size_t>(networks);
+  Tensor w = g.parameter("objects.deform.out.w", batched ? Shape{B, W, 3} : Shape{W, 3}, Init::zeros());
+  Tensor b = g.parameter("objects.deform.out.b", batched ? Shape{B, 3} : Shape{3}, Init::zeros());
+  return bounded_offset(positions, dense(hidden, w, b, Activation::Identity), c.deform_bound);
+}
+
 }  // namespace
 
 HashGridConfig object_hash_config(const FieldConfig& c) {
@@ -73,6 +87,7 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c,
                 kExitInternal);
   const int networks = batched ? static_cast<int>(ps[0]) : 1;
   const bool rigid = c.motion == ObjectMotion::Rigid;
+  if (rigid && c.deform_width > 0) positions = deform_positions(positions, times, c, networks);
   Tensor xyzt = rigid ? positions : concat({positions, times});
   Tensor encoded = encode(xyzt, c, object_hash_config(c), "objects.hash", networks);
   if (level_window.valid()) {

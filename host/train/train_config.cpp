@@ -159,6 +159,12 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("canonical-colour-time-freqs", "object-motion rigid: a canonical field's colour also reads time, encoded with this many frequencies, as the shade of a turning object changes under a fixed light (-1: colour of the position alone; density never reads time)", -1, 24,
                          [](TrainConfig& c) -> int& { return c.field.canonical_colour_time_freqs; }));
   o.back().before = "-1";
+  o.push_back(int_option("deform-width", "object-motion rigid: width of a deformation network that moves each canonical sample as a function of its position and time, for objects that change shape (0: none, the shape stays rigid)", 0, 1024,
+                         [](TrainConfig& c) -> int& { return c.field.deform_width; }));
+  o.back().before = "0";
+  o.push_back(float_option("deform-bound", "object-motion rigid, deform-width > 0: the most a deformation moves a sample (NDC units; the metric scene's otherwise)", 1e-4, 10.0,
+                           [](TrainConfig& c) -> float& { return c.field.deform_bound; }));
+  o.back().before = "0.05";
   o.push_back(float_option("hash-bound", "hash grid: half-size of the encoded box (0: from the scene: NDC, the training rays' extent (see hash-ndc-box-from-rays); else the largest camera coordinate)",
                            0.0, 1e6, [](TrainConfig& c) -> float& { return c.field.hash.bound; }));
   o.push_back(bool_option("hash-ndc-box-from-rays", "NDC scenes, hash-bound 0: the encoded box holds every training ray along x and y (more than [-1, 1] where the camera moves sideways); false: [-1, 1]^3",
@@ -310,6 +316,9 @@ void validate(const TrainConfig& c) {
   if (c.field.skip >= c.field.depth)
     throw Error("option 'skip': " + std::to_string(c.field.skip) + " must be below depth " +
                 std::to_string(c.field.depth));
+  if (c.field.deform_width > 0 && c.field.motion != ObjectMotion::Rigid)
+    throw Error("option 'deform-width': a deformation moves a rigid object's canonical shape; it needs "
+                "'object-motion rigid' (object-motion is " + std::string(object_motion_name(c.field.motion)) + ")");
   const NovelViewLossWeights& w = c.weights;
   if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");

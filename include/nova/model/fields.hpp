@@ -13,7 +13,8 @@
 //            dynamic NeRF); with a rigid motion [PE_L(xyz)] of the canonical position alone,
 //            and with canonical_colour_time_freqs >= 0 the static field's layout with time in
 //            place of the view direction: trunk -> feature -> sigma, blend;
-//            [feature, PE(t)] -> width/2 ReLU -> rgb
+//            [feature, PE(t)] -> width/2 ReLU -> rgb; with deform_width > 0 the canonical
+//            position first moves by a bounded deformation of (position, t)
 // Parameter names: "static.*" and "objects.*"; object parameters carry a leading object
 // dimension [K, ...] when K > 1, so one object's weights are a slice of them.
 #include <string>
@@ -31,6 +32,10 @@ const char* encoding_name(Encoding e);  // "frequency", "hashgrid"
 // 25.36 dB camera-0 PSNR against 24.03 with a cell per frame and more at fine levels, on
 // nvidia_balloon1 (12 frames, novel times) 4 cells 18.59 dB against 17.01 (docs/accuracy.md).
 inline constexpr double kFramesPerTimeCell = 3.0;
+
+// Frequencies of the positional encodings a deformation network reads (position and time):
+// a deformation smooth in both, as a body's is between frames.
+inline constexpr int kDeformFrequencies = 4;
 
 struct FieldConfig {
   Encoding encoding = Encoding::Frequency;
@@ -64,6 +69,14 @@ struct FieldConfig {
   // frame; a colour fixed in canonical space can only average those shades. Density and blend
   // never read time, so the shape stays one shape.
   int canonical_colour_time_freqs = -1;
+  // A rigid object that also changes shape (a person, a balloon): a deformation network of
+  // deform_width (0: none) moves each canonical sample by at most deform_bound (NDC units,
+  // or the metric scene's) before the canonical field reads it, as a function of the sample
+  // and of time; one hidden ReLU layer over the positional encodings (kDeformFrequencies) of
+  // both, the output layer starting at zero. The bound keeps the shape near the rigid one,
+  // which every frame's camera still constrains.
+  int deform_width = 0;
+  float deform_bound = 0.05f;
   // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
   // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
   ObjectMotion motion = ObjectMotion::None;

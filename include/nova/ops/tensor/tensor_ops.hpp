@@ -25,4 +25,8 @@ Tensor repeat_rows(Tensor x, size_t rows);
 // Differentiable in x.
 Tensor scale_columns(Tensor x, Tensor weights);
 
+// y + bound tanh(raw), elementwise, for y and raw of one shape: a position moved by a learned
+// offset that stays within `bound` (> 0) of it. Differentiable in both.
+Tensor bounded_offset(Tensor y, Tensor raw, float bound);
+
 }  // namespace nova
