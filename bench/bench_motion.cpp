@@ -3,7 +3,9 @@
 // object: the true turn per frame, the found turn's error per frame pair (mean, worst) and the
 // drift of the chained turn by the last frame that shows the object. Depth is the disparity
 // placed by fit_disparity (what training uses) or, with --exact-depth, the renders' own
-// depth: the gap between the two says how much of the error is the disparity's.
+// depth: the gap between the two says how much of the error is the disparity's. With --runs
+// DIR (nova-bench accuracy's OUT/runs: DIR/family-S/checkpoint.bin) also the trained
+// trajectory's turns, scored the same way: whether joint training mends the start.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,6 +18,9 @@
 #include "nova/train/disparity_fit.hpp"
 #include "nova/data/scene_io.hpp"
 #include "nova/data/synth.hpp"
+#include "nova/model/checkpoint.hpp"
+#include "nova/runtime/error.hpp"
+#include "nova/sampling/rigid_motion.hpp"
 #include "nova/train/motion_alignment.hpp"
 
 namespace nova::bench {
@@ -62,9 +67,20 @@ int mask_pixels(const Image8& m) {
 struct ObjectScore {
   int seed = 0, object = 0, pairs = 0;
   double true_turn = 0, mean_error = 0, worst_error = 0, drift = 0, chained_truth = 0;
+  // The trained trajectory's (with --runs): error per frame pair, drift by the last frame.
+  double trained_error = -1, trained_drift = -1;
 };
 
-std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact_depth) {
+// Object k's turn from frame a to frame b in a trained trajectory [K, F, 6]: a world point of
+// frame a maps to the canonical y = R_a (x - tau_a) + q and back to frame b's world as
+// R_b^T (y - q) + tau_b, a turn of R_b^T R_a.
+Mat3 trained_turn(const std::vector<float>& rows, int frames, int k, int a, int b) {
+  const float* m = &rows[size_t(k - 1) * size_t(frames) * 6];
+  const auto angles = [&](int i) { return Vec3{m[i * 6], m[i * 6 + 1], m[i * 6 + 2]}; };
+  return multiply(transpose(euler_xyz_to_matrix(angles(b))), euler_xyz_to_matrix(angles(a)));
+}
+
+std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact_depth, const std::string& run) {
   const Scene scene = load_scene(dir);
   const SynthWorld world("family", uint32_t(seed));
   const int F = int(scene.frames.size());
@@ -107,6 +123,14 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
                             transpose(rotation_of(world.object_pose(k, frame_time(a, F)))));
     return multiply(Rc, multiply(r, transpose(Rc)));
   };
+  std::vector<float> trained;
+  if (!run.empty()) {
+    const CheckpointArray& m = read_checkpoint(run + "/checkpoint.bin").array("objects.motion");
+    trained = m.values;
+    if (trained.size() != size_t(world.objects()) * size_t(F) * 6)
+      throw Error("nova-bench motion: " + run + "'s objects.motion holds " + std::to_string(trained.size()) +
+                  " numbers, not " + std::to_string(world.objects()) + " objects x " + std::to_string(F) + " frames x 6");
+  }
   std::vector<ObjectScore> out;
   for (int k = 1; k <= world.objects(); ++k) {
     ObjectScore s;
@@ -132,6 +156,14 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       chain = multiply(found, chain);
       ++s.pairs;
     }
+    if (!trained.empty() && seen.size() > 1) {
+      s.trained_error = s.trained_drift = 0;
+      for (size_t j = 1; j < seen.size(); ++j)
+        s.trained_error += degrees(multiply(trained_turn(trained, F, k, seen[j - 1], seen[j]), transpose(true_turn(k, seen[j - 1], seen[j]))));
+      s.trained_error /= double(seen.size() - 1);
+      s.trained_drift = degrees(multiply(trained_turn(trained, F, k, seen.front(), seen.back()),
+                                         transpose(true_turn(k, seen.front(), seen.back()))));
+    }
     if (s.pairs > 0) {
       s.true_turn /= s.pairs;
       s.mean_error /= s.pairs;
@@ -147,35 +179,48 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
-                 "renders' exact depth instead of the fitted disparity\n";
+                 "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
+                 "trajectories of DIR/family-S (nova-bench accuracy's OUT/runs)\n";
     return 0;
   }
+  const std::string runs = o.str("runs");
   ScratchDir scratch("motion");
-  std::printf("%5s %7s %6s %12s %11s %11s %18s %8s\n", "seed", "object", "pairs", "true deg/fr", "error mean",
+  std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");
-  double sum_error = 0, sum_drift = 0;
+  if (!runs.empty()) std::printf(" %13s %13s", "trained error", "trained drift");
+  std::printf("\n");
+  double sum_error = 0, sum_drift = 0, sum_trained_error = 0, sum_trained_drift = 0;
   int objects = 0;
   for (long seed : o.integers("seeds")) {
     const auto dir = scratch / ("family" + std::to_string(seed));
     write_synthetic_scene(dir.string(), "family", uint32_t(seed));
     const auto t0 = std::chrono::steady_clock::now();
-    const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"));
+    const std::string run = runs.empty() ? "" : runs + "/family-" + std::to_string(seed);
+    const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"), run);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (const ObjectScore& s : scores) {
-      std::printf("%5d %7d %6d %12.2f %11.2f %11.2f %8.1f / %7.1f %8.1f\n", s.seed, s.object, s.pairs, s.true_turn,
+      std::printf("%5d %7d %6d %12.2f %11.2f %11.2f %8.1f / %7.1f %8.1f", s.seed, s.object, s.pairs, s.true_turn,
                   s.mean_error, s.worst_error, s.drift, s.chained_truth, seconds);
+      if (!runs.empty()) std::printf(" %13.2f %13.1f", s.trained_error, s.trained_drift);
+      std::printf("\n");
       if (s.pairs == 0) continue;
       sum_error += s.mean_error;
       sum_drift += s.drift;
+      sum_trained_error += s.trained_error;
+      sum_trained_drift += s.trained_drift;
       ++objects;
     }
   }
-  if (objects > 0)
-    std::printf("mean over %d objects: error %.2f degrees per frame pair, drift %.1f degrees\n", objects,
+  if (objects > 0) {
+    std::printf("mean over %d objects: error %.2f degrees per frame pair, drift %.1f degrees", objects,
                 sum_error / objects, sum_drift / objects);
+    if (!runs.empty())
+      std::printf("; trained: error %.2f, drift %.1f", sum_trained_error / objects, sum_trained_drift / objects);
+    std::printf("\n");
+  }
   return 0;
 }
 
