@@ -173,24 +173,31 @@ std::string num_or(double v, int decimals, const std::string& none) {
 // frame's PSNR hides them.
 std::string table_text(const std::vector<SceneResult>& results, const std::vector<SetSummary>& sets) {
   std::ostringstream o;
-  o << std::left << std::setw(18) << "scene" << std::setw(7) << "set" << std::right << std::setw(7) << "steps"
+  // Columns as wide as their longest entry and a space, so that no name runs into the next.
+  int name_w = 6, set_w = 4;
+  for (const SceneResult& r : results) {
+    name_w = std::max(name_w, static_cast<int>(r.name.size()) + 1);
+    set_w = std::max(set_w, static_cast<int>(r.set.size()) + 1);
+  }
+  for (const SetSummary& s : sets) set_w = std::max(set_w, static_cast<int>(s.set.size()) + 1);
+  o << std::left << std::setw(name_w) << "scene" << std::setw(set_w) << "set" << std::right << std::setw(7) << "steps"
     << std::setw(9) << "train s" << std::setw(8) << "eval s" << std::setw(10) << "cam0 obj" << std::setw(7) << "cam0"
     << std::setw(7) << "SSIM" << std::setw(10) << "held obj" << std::setw(9) << "held-out" << std::setw(7) << "SSIM"
     << std::setw(10) << "comp obj" << std::setw(9) << "compose" << "  status\n";
   for (const SceneResult& r : results)
-    o << std::left << std::setw(18) << r.name << std::setw(7) << r.set << std::right << std::setw(7) << r.steps
+    o << std::left << std::setw(name_w) << r.name << std::setw(set_w) << r.set << std::right << std::setw(7) << r.steps
       << std::setw(9) << num_or(r.train_s, 1) << std::setw(8) << num_or(r.eval_s, 1) << std::setw(10)
       << num_or(r.cam0_object_psnr, 2) << std::setw(7) << num_or(r.cam0_psnr, 2) << std::setw(7)
       << num_or(r.cam0_ssim, 3) << std::setw(10) << num_or(r.heldout_object_psnr, 2) << std::setw(9)
       << num_or(r.heldout_psnr, 2) << std::setw(7) << num_or(r.heldout_ssim, 3) << std::setw(10)
       << num_or(r.compose_object_psnr, 2) << std::setw(9) << num_or(r.compose_psnr, 2) << "  " << r.status << "\n";
   o << "\n"
-    << std::left << std::setw(7) << "set" << std::right << std::setw(7) << "scenes" << std::setw(10) << "cam0 obj"
+    << std::left << std::setw(set_w) << "set" << std::right << std::setw(7) << "scenes" << std::setw(10) << "cam0 obj"
     << std::setw(11) << "cam0 mean" << std::setw(10) << "cam0 min" << std::setw(10) << "held obj" << std::setw(15)
     << "held-out mean" << std::setw(10) << "comp obj" << std::setw(14) << "compose mean" << std::setw(10) << "train s"
     << "\n";
   for (const SetSummary& s : sets)
-    o << std::left << std::setw(7) << s.set << std::right << std::setw(7) << s.scenes << std::setw(10)
+    o << std::left << std::setw(set_w) << s.set << std::right << std::setw(7) << s.scenes << std::setw(10)
       << num_or(s.mean_cam0_object_psnr, 2) << std::setw(11) << num_or(s.mean_cam0_psnr, 2) << std::setw(10)
       << num_or(s.min_cam0_psnr, 2) << std::setw(10) << num_or(s.mean_heldout_object_psnr, 2) << std::setw(15)
       << num_or(s.mean_heldout_psnr, 2) << std::setw(10) << num_or(s.mean_compose_object_psnr, 2) << std::setw(14)
