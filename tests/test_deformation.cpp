@@ -4,7 +4,7 @@
 // reach the density too, and the option needs the rigid model.
 #include <boost/test/unit_test.hpp>
 #include <functional>
-#include <map>
+#include <algorithm>
 #include <string>
 
 #include "field_test_util.hpp"
@@ -27,30 +27,17 @@ FieldConfig deforming_field(int width) {
   return f;
 }
 
-// Two objects' fields at fixed canonical points and times (one per row). Every parameter the
-// field shares with the rigid one gets values drawn from its name, so that a field with and
-// one without the deformation agree on them; the deformation's own parameters keep their
-// initial values unless `draw_deformation`.
+// Every parameter the field shares with the rigid one gets values drawn from its name, so that
+// a field with and one without the deformation agree on them; the deformation's own
+// parameters keep their initial values unless `draw_deformation`.
 std::vector<float> run_field(const FieldConfig& f, const std::vector<float>& times, bool draw_deformation,
                              std::vector<std::string>* names = nullptr) {
-  const size_t K = 2, M = times.size() / K;
-  Graph g;
-  Tensor p = g.input("p", Shape{K, M, 3});
-  Tensor t = g.input("t", Shape{K, M, 1});
-  Tensor out = build_object_fields(p, t, f);
-  g.keep(out);
-  Executor ex(runtime(), g);
-  ex.set(p, random_floats(K * M * 3, -0.9f, 0.9f, 1));
-  ex.set(t, times);
-  for (Tensor w : g.parameters()) {
-    const std::string name = w.info().name;
-    if (names) names->push_back(name);
-    const bool deformation = name.rfind("objects.deform.", 0) == 0;
-    if (deformation && !draw_deformation) continue;
-    ex.set(w, random_floats(w.shape().numel(), -1.0f, 1.0f, static_cast<unsigned>(std::hash<std::string>{}(name) & 0xffff)));
-  }
-  ex.forward();
-  return ex.get(out);
+  FieldRun run = run_object_fields(f, times, [&](const std::string& name) -> std::optional<unsigned> {
+    if (name.rfind("objects.deform.", 0) == 0 && !draw_deformation) return std::nullopt;
+    return static_cast<unsigned>(std::hash<std::string>{}(name) & 0xffff);
+  });
+  if (names) *names = run.names;
+  return run.raw;
 }
 
 }  // namespace
