@@ -125,8 +125,8 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
   };
   std::vector<float> trained;
   if (!run.empty()) {
-    const CheckpointArray& m = read_checkpoint(run + "/checkpoint.bin").array("objects.motion");
-    trained = m.values;
+    const Checkpoint checkpoint = read_checkpoint(run + "/checkpoint.bin");
+    trained = checkpoint.array("objects.motion").values;
     if (trained.size() != size_t(world.objects()) * size_t(F) * 6)
       throw Error("nova-bench motion: " + run + "'s objects.motion holds " + std::to_string(trained.size()) +
                   " numbers, not " + std::to_string(world.objects()) + " objects x " + std::to_string(F) + " frames x 6");
