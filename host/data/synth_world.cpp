@@ -290,8 +290,9 @@ Pose34 SynthWorld::object_pose(int object, double time) const {
 }
 
 SynthVec SynthWorld::object_stretch(int object, double time) const {
-  const Pose34 check = object_pose(object, time);  // names a missing object
-  (void)check;
+  if (object < 1 || object > objects())
+    throw Error("synthetic object " + std::to_string(object) + " does not exist (1 to " +
+                std::to_string(objects()) + ")");
   const SynthMotion& m = scene_.objects[size_t(object - 1)].motion;
   const double u = 0.5 * (time + 1.0);
   const double wave = std::sin(2 * kPi * (m.stretch_rate * u + m.stretch_phase));
