@@ -280,20 +280,26 @@ Camera SynthWorld::heldout_camera(int index) const {
   return look_at(preset(), h[size_t(index - 1)], scene_.camera.target);
 }
 
+namespace {
+
+// Object k's motion (1..K), or an error naming the missing object.
+const SynthMotion& object_motion(const SynthScene& scene, int object) {
+  const int count = static_cast<int>(scene.objects.size());
+  if (object < 1 || object > count)
+    throw Error("synthetic object " + std::to_string(object) + " does not exist (1 to " + std::to_string(count) + ")");
+  return scene.objects[size_t(object - 1)].motion;
+}
+
+}  // namespace
+
 Pose34 SynthWorld::object_pose(int object, double time) const {
-  if (object < 1 || object > objects())
-    throw Error("synthetic object " + std::to_string(object) + " does not exist (1 to " +
-                std::to_string(objects()) + ")");
-  const SynthMotion& m = scene_.objects[size_t(object - 1)].motion;
+  const SynthMotion& m = object_motion(scene_, object);
   const double u = 0.5 * (time + 1.0);
   return axis_angle_pose(m.spin_axis, m.spin_rate * u + 2 * kPi * m.spin_phase, motion_centre(m, u));
 }
 
 SynthVec SynthWorld::object_stretch(int object, double time) const {
-  if (object < 1 || object > objects())
-    throw Error("synthetic object " + std::to_string(object) + " does not exist (1 to " +
-                std::to_string(objects()) + ")");
-  const SynthMotion& m = scene_.objects[size_t(object - 1)].motion;
+  const SynthMotion& m = object_motion(scene_, object);
   const double u = 0.5 * (time + 1.0);
   const double wave = std::sin(2 * kPi * (m.stretch_rate * u + m.stretch_phase));
   return {1 + m.stretch[0] * wave, 1 + m.stretch[1] * wave, 1 + m.stretch[2] * wave};
