@@ -207,9 +207,11 @@ void check_synth_preset(const std::string& name) {
     throw Error("unknown synthetic preset '" + name + "' (use tiny, default, family or deforming)");
 }
 
+bool synth_preset_drawn(const std::string& name) { return name == "family" || name == "deforming"; }
+
 SynthPreset synth_preset(const std::string& name) {
   check_synth_preset(name);
-  if (name == "family" || name == "deforming")
+  if (synth_preset_drawn(name))
     throw Error("synthetic preset '" + name + "' draws its size from the seed: use synth_scene");
   SynthPreset p;
   p.name = name;

@@ -195,7 +195,7 @@ std::string write_synthetic_scene(const std::string& out_dir, const std::string&
        << "\nobjects " << k_objects
        << "\ntime frame i of N: t = 2 i / N - 1\n";
   // The fixed presets' synth.txt stays as it always was; a family scene says what was drawn.
-  if (p.name == "family" || p.name == "deforming") info << describe_synth_scene(world.scene());
+  if (synth_preset_drawn(p.name)) info << describe_synth_scene(world.scene());
   write_text(root / "synth.txt", info.str());
   staged.commit();
 

@@ -69,6 +69,8 @@ struct SynthPreset {
 SynthPreset synth_preset(const std::string& name);
 // Throws the error an unknown preset name gets; "tiny", "default", "family" and "deforming"
 // pass.
+// Whether the seed draws the whole scene ("family", "deforming"), so that synth.txt describes it.
+bool synth_preset_drawn(const std::string& name);
 void check_synth_preset(const std::string& name);
 
 // A shape in its own frame, centred at the origin. `size` per kind:
