@@ -72,3 +72,23 @@ __kernel void bounded_offset_back(__global const float* raw, __global const floa
     draw[i] = acc_draw ? draw[i] + v : v;
   }
 }
+
+// out = (x - c) exp(l) per axis, with box row b = (c, l) of batch b (rows [B, M, 3]): a
+// rigid object's canonical position in the coordinates of its own box.
+__kernel void box_coordinates(__global const float* x, __global const float* box, __global float* out,
+                              uint rows, uint n, int unused) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  __global const float* b = box + (size_t)(i / (rows * 3)) * 6;
+  const uint j = i % 3;
+  out[i] = (x[i] - b[j]) * exp(b[3 + j]);
+}
+
+// Its backward in x: dx (+)= dout exp(l).
+__kernel void box_coordinates_back(__global const float* dout, __global const float* box, __global float* dx,
+                                   uint rows, uint n, int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  const float v = dout[i] * exp(box[(size_t)(i / (rows * 3)) * 6 + 3 + i % 3]);
+  dx[i] = accumulate ? dx[i] + v : v;
+}

@@ -1,5 +1,5 @@
 // The op table's tensor and layer ops: positional_encoding, bias_act, linear, dense, concat,
-// gradient_gate, repeat_rows, scale_columns, bounded_offset and the random draws. The 1009-row shapes are the odd-size sweep
+// gradient_gate, repeat_rows, scale_columns, bounded_offset, box_coordinates and the random draws. The 1009-row shapes are the odd-size sweep
 // (several work-groups and a partial last one); the 1-row ones a single, partial group.
 #include <algorithm>
 #include <cmath>
@@ -434,6 +434,48 @@ OpEntry bounded_offset_entry() {
   return e;
 }
 
+OpEntry box_coordinates_entry() {
+  OpEntry e;
+  e.name = "box_coordinates";
+  // dims: rows M, batches B (x [M, 3] and box [6] for B = 1, else [B, M, 3] and [B, 6]).
+  e.shapes = {{{kOddRows, 1}, 0, "1009 x 3"}, {{1, 1}, 0, "1 x 3"}, {{13, 3}, 0, "[3, 13, 3]"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    const bool batched = s.dims[1] > 1;
+    Tensor x = g.input("x", batched ? Shape{s.dims[1], s.dims[0], 3} : Shape{s.dims[0], 3}, true);
+    Tensor box = g.input("box", batched ? Shape{s.dims[1], 6} : Shape{6});
+    return OpGraph{{x, box}, {box_coordinates(x, box)}, {}};
+  };
+  e.values = [](const OpShape& s) {
+    // Centres in [-1, 1], log scales in [-1, 3] (a box down to 1/20 of the scene's).
+    auto box = random_floats(s.dims[1] * 6, -1, 1, 134);
+    const auto logs = random_floats(s.dims[1] * 3, -1, 3, 135);
+    for (size_t b = 0; b < s.dims[1]; ++b)
+      for (size_t j = 0; j < 3; ++j) box[b * 6 + 3 + j] = logs[b * 3 + j];
+    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1] * 3, -1, 1, 133), box};
+  };
+  // float32: x - c of two floats rounds once (2^-24 relative), exp is within 3 ulp (OpenCL
+  // 1.2's bound, <= 3 * 2^-23 relative) and the product rounds once: 4.8e-7 relative in all.
+  e.reference = [](const OpCase& c) {
+    const size_t rows = c.shape.dims[0] * 3;
+    std::vector<double> ref;
+    for (size_t i = 0; i < c.values[0].size(); ++i) {
+      const size_t b = i / rows, j = i % 3;
+      ref.push_back((double(c.values[0][i]) - c.values[1][b * 6 + j]) * std::exp(double(c.values[1][b * 6 + 3 + j])));
+    }
+    return std::vector<Expected>{{ref, {0, 1e-6}}};
+  };
+  e.gradient = [](const OpCase& c) {
+    const size_t rows = c.shape.dims[0] * 3;
+    std::vector<double> dx;
+    for (size_t i = 0; i < c.upstream[0].size(); ++i)
+      dx.push_back(c.upstream[0][i] * std::exp(double(c.values[1][(i / rows) * 6 + 3 + i % 3])));
+    return std::vector<Expected>{grad_expected(dx), {}};
+  };
+  e.fd = GradCheckOptions{};
+  e.flops = [](const OpShape& s) { return 20.0 * double(s.dims[0] * s.dims[1] * 3); };
+  return e;
+}
+
 OpEntry random_entry(bool normal) {
   OpEntry e;
   e.name = normal ? "random_normal" : "random_uniform";
@@ -469,6 +511,7 @@ void register_core_ops(std::vector<OpEntry>& t) {
   t.push_back(repeat_rows_entry());
   t.push_back(scale_columns_entry());
   t.push_back(bounded_offset_entry());
+  t.push_back(box_coordinates_entry());
   t.push_back(random_entry(false));
   t.push_back(random_entry(true));
 }

@@ -129,16 +129,18 @@ BOOST_AUTO_TEST_CASE(train_render_compose_eval_write_their_files) {
   BOOST_TEST(read_all(dir / "pose_commas" / "000.png") == read_all(dir / "pose_groups" / "000.png"));
 }
 
-// Rigid objects that also deform: train, resume, render every frame and a composition, and
-// evaluate, all through the deformation network's parameters in the checkpoint.
-BOOST_AUTO_TEST_CASE(deforming_objects_train_resume_render_and_compose) {
+// Rigid objects that also deform, each in a box of its own: train, resume, render every frame
+// and a composition, and evaluate, all through the deformation network's parameters and the
+// objects' boxes in the checkpoint.
+BOOST_AUTO_TEST_CASE(deforming_boxed_objects_train_resume_render_and_compose) {
   if (!has_cli()) return;
   TempDir dir("cli-deform");
   const std::string scene = cached_tiny_scene().string(), run = (dir / "run").string();
-  const std::string deform = " --object-motion rigid --deform-width 8 --deform-bound 0.1";
+  const std::string deform = " --object-motion rigid --deform-width 8 --deform-bound 0.1 --object-box true";
   Result t = nova_cli("train --scene " + scene + " --out " + run + kTiny + deform, dir);
   BOOST_REQUIRE_MESSAGE(t.code == 0, t.err);
   BOOST_TEST(read_all(dir / "run" / "config.ini").find("\ndeform-width = 8\n") != std::string::npos);
+  BOOST_TEST(read_all(dir / "run" / "config.ini").find("\nobject-box = true\n") != std::string::npos);
   Result more = nova_cli("train --out " + run + " --resume --steps 9", dir);
   BOOST_REQUIRE_MESSAGE(more.code == 0, more.err);
   Result r = nova_cli("render --run " + run + " --out " + (dir / "frames").string() + " --no-masks", dir);

@@ -10,6 +10,8 @@
 #include "nova/metrics/image_metrics.hpp"
 #include "nova/data/scene_io.hpp"
 #include "nova/io/pictures.hpp"
+#include "nova/model/field_graphs.hpp"
+#include "nova/model/fields.hpp"
 #include "nova/sampling/rigid_motion.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/train/trainer.hpp"
@@ -162,11 +164,18 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
   // Stop at step 8 inside pretraining's hand-over (pretrain 5) and exactly at it (8): the
   // second half runs joint steps with augmentation (every 3rd from the first joint step).
   // With a rigid object motion too: its trajectory is a parameter like the others (set once
-  // on entering the joint phase, then trained).
-  for (auto [pretrain, motion] : {std::pair{5, ObjectMotion::None}, {8, ObjectMotion::None}, {5, ObjectMotion::Rigid}}) {
+  // on entering the joint phase, then trained), and so are the objects' own boxes.
+  struct Case {
+    int pretrain;
+    ObjectMotion motion;
+    bool object_box;
+  };
+  for (auto [pretrain, motion, object_box] : {Case{5, ObjectMotion::None, false}, Case{8, ObjectMotion::None, false},
+                                              Case{5, ObjectMotion::Rigid, false}, Case{5, ObjectMotion::Rigid, true}}) {
     TempDir dir("resume");
     TrainConfig c = tiny_config(Encoding::HashGrid);
     c.field.motion = motion;
+    c.field.object_box = object_box;
     c.pretrain_steps = pretrain;
     c.steps = 11;
     c.rays = 64;
@@ -210,6 +219,7 @@ BOOST_AUTO_TEST_CASE(rigid_objects_start_at_their_masks) {
   TempDir dir("rigid");
   TrainConfig c = tiny_config(Encoding::HashGrid);
   c.field.motion = ObjectMotion::Rigid;
+  c.field.object_box = true;
   c.pretrain_steps = 60;
   c.steps = 1;
   c.lr = 0.0f;  // the one joint step leaves the motion where it started
@@ -245,6 +255,20 @@ BOOST_AUTO_TEST_CASE(rigid_objects_start_at_their_masks) {
     const double spin = std::fabs(world.scene().objects[static_cast<size_t>(k - 1)].motion.spin_rate) * (F - 1) / F;
     BOOST_TEST_MESSAGE("object " << k << ": turn " << found << " rad by the last frame, the world's " << spin);
     BOOST_TEST(std::fabs(found - spin) < 0.3 * spin);
+    // Its box (object-box) sits at the pivot, in NDC, and is at most the scene's box: this
+    // 64 x 48 scene's objects fill much of the frame, so only a lower bound is tight.
+    const CheckpointArray& box = ck.array(kObjectBoxName);
+    BOOST_REQUIRE(box.values.size() == static_cast<size_t>(K * 6));
+    const float* b = box.values.data() + static_cast<size_t>(k - 1) * 6;
+    const RayGeometry geo = ray_geometry(scene);
+    const Vec3 q = motion_pivot(rows, F);
+    const Vec3 centre{geo.ax * q[0] / q[2], geo.ay * q[1] / q[2], 1 + 2 / q[2]};
+    for (size_t j = 0; j < 3; ++j) {
+      BOOST_TEST(std::fabs(b[j] - centre[j]) < 1e-5, "object " << k << " box centre axis " << j);
+      const double half = std::exp(-double(b[3 + j]));
+      BOOST_TEST_MESSAGE("object " << k << " box half-size axis " << j << ": " << half);
+      BOOST_TEST((half > 0.01 && half <= geo.box[j] * (1 + 1e-6)), "object " << k << " box half-size axis " << j << ": " << half);
+    }
   }
 }
 

@@ -51,6 +51,10 @@ HashGridConfig object_hash_config(const FieldConfig& c) {
   HashGridConfig h = c.hash;
   if (c.object_max_resolution > 0) h.max_resolution = c.object_max_resolution;
   if (c.motion == ObjectMotion::Rigid && c.canonical_max_resolution > 0) h.max_resolution = c.canonical_max_resolution;
+  if (c.motion == ObjectMotion::Rigid && c.object_box) {
+    h.bound = 1.0f;
+    h.axis_bound = {};
+  }
   return h;
 }
 
@@ -88,6 +92,10 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c,
   const int networks = batched ? static_cast<int>(ps[0]) : 1;
   const bool rigid = c.motion == ObjectMotion::Rigid;
   if (rigid && c.deform_width > 0) positions = deform_positions(positions, times, c, networks);
+  if (rigid && c.object_box) {
+    const Shape bs = batched ? Shape{static_cast<size_t>(networks), 6} : Shape{6};
+    positions = box_coordinates(positions, positions.graph->parameter(kObjectBoxName, bs, Init::zeros()));
+  }
   Tensor xyzt = rigid ? positions : concat({positions, times});
   Tensor encoded = encode(xyzt, c, object_hash_config(c), "objects.hash", networks);
   if (level_window.valid()) {

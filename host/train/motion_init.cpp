@@ -99,8 +99,33 @@ ImageF fitted_depth(const Frame& f, const DisparityFit& fit) {
 
 }  // namespace
 
-std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
-                                  int samples, Executor& trained) {
+std::array<float, 6> object_box_row(const Vec3& centre, double half, const RayGeometry& geo) {
+  // NDC (RayOptions::ndc_near 1): ndc(x) = (ax x / z, ay y / z, 1 + 2 / z) for z < 0.
+  const auto map = [&](Vec3 x) -> Vec3 {
+    if (!geo.ndc) return x;
+    const double z = std::min(x[2], -1e-3);
+    return {geo.ax * x[0] / z, geo.ay * x[1] / z, 1.0 + 2.0 / z};
+  };
+  const Vec3 c = map(centre);
+  // NDC is linear-fractional, so the cube's image lies between the images of its corners.
+  std::array<double, 3> h{};
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 corner = map({centre[0] + (i & 1 ? half : -half), centre[1] + (i & 2 ? half : -half),
+                             centre[2] + (i & 4 ? half : -half)});
+    for (size_t d = 0; d < 3; ++d) h[d] = std::max(h[d], std::fabs(corner[d] - c[d]));
+  }
+  std::array<float, 6> row{};
+  for (size_t d = 0; d < 3; ++d) {
+    // Never coarser than the scene's own box: an object as large as the scene keeps its grid.
+    const double scene_half = geo.ndc ? geo.box[d] : geo.extent;
+    row[d] = static_cast<float>(c[d]);
+    row[3 + d] = static_cast<float>(-std::log(std::clamp(h[d], 1e-6, static_cast<double>(scene_half))));
+  }
+  return row;
+}
+
+MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
+                           int samples, Executor& trained) {
   const int K = geo.num_objects, F = motion_options(geo).frames;
   if (K < 1) throw Error("initial_motion: the scene has no objects", kExitInternal);
   const DisparityFit fit = geo.disparity ? fit_disparity(scene) : DisparityFit{};
@@ -132,8 +157,9 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
 
   // Per object, the anchor of every frame that shows it; frames without one take their
   // neighbours' (linear between, the nearest beyond).
-  std::vector<float> rows(static_cast<size_t>(K) * F * 6, 0.0f);
+  std::vector<float> rows(static_cast<size_t>(K) * F * 6, 0.0f), boxes(static_cast<size_t>(K) * 6, 0.0f);
   for (int k = 1; k <= K; ++k) {
+    double radius = 0;  // world units, the largest over the frames
     std::vector<std::optional<Vec3>> anchor(static_cast<size_t>(F));
     std::vector<size_t> frame_of(static_cast<size_t>(F));
     for (size_t i = 0; i < scene.frames.size(); ++i) {
@@ -152,6 +178,12 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
       if (n == 0) continue;
       cx /= n;
       cy /= n;
+      std::vector<double> spread;
+      for (int y = 0; y < m.height; ++y)
+        for (int x = 0; x < m.width; ++x)
+          if (m.at(x, y) >= 128) spread.push_back(std::hypot(x - cx, y - cy));
+      std::nth_element(spread.begin(), spread.begin() + static_cast<long>(spread.size() * 95 / 100), spread.end());
+      const double pixels = spread[spread.size() * 95 / 100] + 0.5;
       const int index = std::clamp(static_cast<int>(std::lround((f.time + 1.0) * 0.5 * F)), 0, F - 1);
       frame_of[static_cast<size_t>(index)] = i;
       if (fitted) {
@@ -166,6 +198,11 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
         const double t = std::clamp(d.empty() ? 0.5 * (geo.near + geo.far) : d[d.size() / 4],
                                     static_cast<double>(geo.near), static_cast<double>(geo.far));
         anchor[static_cast<size_t>(index)] = world_point(f.camera, cx, cy, t, geo.ndc);
+      }
+      if (const auto& a = anchor[static_cast<size_t>(index)]) {
+        double distance = 0;
+        for (int d = 0; d < 3; ++d) distance += ((*a)[d] - f.camera.position(d)) * ((*a)[d] - f.camera.position(d));
+        radius = std::max(radius, pixels * std::sqrt(distance) / f.camera.fx);
       }
     }
     std::vector<int> known;
@@ -214,8 +251,10 @@ std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeom
       }
       for (int d = 0; d < 6; ++d) r[static_cast<size_t>(i) * 6 + d] = static_cast<float>(p[static_cast<size_t>(d)]);
     }
+    const std::array<float, 6> box = object_box_row(motion_pivot(r, F), kObjectBoxRadii * radius, geo);
+    std::copy(box.begin(), box.end(), boxes.begin() + static_cast<long>(k - 1) * 6);
   }
-  return rows;
+  return {rows, boxes};
 }
 
 }  // namespace nova

@@ -159,6 +159,8 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("canonical-colour-time-freqs", "object-motion rigid: a canonical field's colour also reads time, encoded with this many frequencies, as the shade of a turning object changes under a fixed light (-1: colour of the position alone; density never reads time)", -1, 24,
                          [](TrainConfig& c) -> int& { return c.field.canonical_colour_time_freqs; }));
   o.back().before = "-1";
+  o.push_back(bool_option("object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object",
+                          [](TrainConfig& c) -> bool& { return c.field.object_box; }));
   o.push_back(int_option("deform-width", "object-motion rigid: width of a deformation network that moves each canonical sample as a function of its position and time, for objects that change shape (0: none, the shape stays rigid)", 0, 1024,
                          [](TrainConfig& c) -> int& { return c.field.deform_width; }));
   o.back().before = "0";
@@ -318,6 +320,9 @@ void validate(const TrainConfig& c) {
                 std::to_string(c.field.depth));
   if (c.field.deform_width > 0 && c.field.motion != ObjectMotion::Rigid)
     throw Error("option 'deform-width': a deformation moves a rigid object's canonical shape; it needs "
+                "'object-motion rigid' (object-motion is " + std::string(object_motion_name(c.field.motion)) + ")");
+  if (c.field.object_box && c.field.motion != ObjectMotion::Rigid)
+    throw Error("option 'object-box': a box of its own is a rigid object's canonical space; it needs "
                 "'object-motion rigid' (object-motion is " + std::string(object_motion_name(c.field.motion)) + ")");
   const NovelViewLossWeights& w = c.weights;
   if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)

@@ -134,8 +134,13 @@ void Trainer::ensure_phase() {
   // Rigid objects start where their masks and the disparity put them, placed by the static
   // NeRF that pretraining made: at the joint phase's first step only (a resume loads the
   // trained motion instead).
-  if (g->motion.valid() && step_ == config_.pretrain_steps)
-    e->set(g->motion, initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e));
+  if (g->motion.valid() && step_ == config_.pretrain_steps) {
+    const MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e);
+    e->set(g->motion, start.rows);
+    for (Tensor p : g->graph.parameters())
+      if (p.info().name == kObjectBoxName)
+        e->set(p, std::vector<float>(start.boxes.begin(), start.boxes.begin() + static_cast<long>(p.shape().numel())));
+  }
   exec_.reset();
   graph_ = std::move(g);
   exec_ = std::move(e);

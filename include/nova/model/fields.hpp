@@ -77,6 +77,12 @@ struct FieldConfig {
   // which every frame's camera still constrains.
   int deform_width = 0;
   float deform_bound = 0.05f;
+  // A rigid object's canonical field encodes a box of its own around the object (parameter
+  // "objects.box", set from the masks and the disparity when joint training starts, never
+  // learned) instead of the scene's box: its grid's cells are sized by the object. In the
+  // scene's box a small object spans a few cells, and in NDC fewer still in depth, which a
+  // turning object shows sideways as blur.
+  bool object_box = false;
   // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
   // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
   ObjectMotion motion = ObjectMotion::None;
@@ -92,7 +98,8 @@ struct FieldConfig {
 Tensor build_static_field(Tensor positions, Tensor viewdirs, const FieldConfig& config);
 
 // The object NeRFs' hash grid: `hash` with object_max_resolution (a rigid canonical field:
-// canonical_max_resolution, when set) in place of its finest level.
+// canonical_max_resolution, when set) in place of its finest level; with object_box the
+// cube [-1, 1]^3 of the object's own box.
 HashGridConfig object_hash_config(const FieldConfig& config);
 
 // positions [B, M, 3] (or [M, 3] for B = 1), times of the same shape with 1 column -> raw
@@ -101,6 +108,9 @@ HashGridConfig object_hash_config(const FieldConfig& config);
 // level_window [levels * features] (data; a hash grid only): the encoding's columns scaled by
 // it before the trunk, training's coarse-to-fine window (level_window in step_graphs.hpp).
 Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& config, Tensor level_window = {});
+
+// The name of the object boxes' parameter ([K, 6] or [6]; box_coordinates' rows).
+inline const char* const kObjectBoxName = "objects.box";
 
 // Parameter name prefixes, for checkpoints and the inference renderer.
 inline const std::string kStaticPrefix = "static.";

@@ -1,6 +1,7 @@
 #pragma once
 // The starting trajectories of rigid objects (motion.hpp), from the scene's masks and
 // disparity and the pretrained static NeRF.
+#include <array>
 #include <vector>
 
 #include "nova/graph/executor.hpp"
@@ -8,6 +9,7 @@
 #include "nova/model/field_graphs.hpp"
 #include "nova/runtime/runtime.hpp"
 #include "nova/model/scene.hpp"
+#include "nova/sampling/rigid_motion.hpp"
 
 namespace nova {
 
@@ -19,7 +21,23 @@ namespace nova {
 // the nearer quartile of the static NeRF's depth behind the mask. Frames without the object
 // take their neighbours' rows (linear between, the nearest beyond).
 // `trained` holds the static NeRF's weights ("static.*"), rendered only without a fit.
-std::vector<float> initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
-                                  int samples, Executor& trained);
+struct MotionStart {
+  std::vector<float> rows;   // [K, F, 6]
+  std::vector<float> boxes;  // [K, 6]: each object's box (FieldConfig::object_box), object_box_row
+};
+MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
+                           int samples, Executor& trained);
+
+// The box_coordinates row (c, l) of a cube of half-size `half` (world units) about the world
+// point `centre`: the box about the centre's image that holds the cube's image (in NDC the
+// cube's near side stretches more: its reach is taken on both sides), no larger on any axis
+// than the scene's box (RayGeometry::box; a metric scene's extent).
+std::array<float, 6> object_box_row(const Vec3& centre, double half, const RayGeometry& geo);
+
+// Half-sizes of an object's box in units of its radius as the masks show it (the 95th
+// percentile of its pixels' distances from their centroid, at the anchor's distance, the
+// largest over the frames). The anchor sits on the object's visible surface, so its centre
+// lies up to a radius behind; one more radius is the margin for what the masks miss.
+inline constexpr double kObjectBoxRadii = 2.5;
 
 }  // namespace nova

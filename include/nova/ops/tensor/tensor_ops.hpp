@@ -29,4 +29,9 @@ Tensor scale_columns(Tensor x, Tensor weights);
 // offset that stays within `bound` (> 0) of it. Differentiable in both.
 Tensor bounded_offset(Tensor y, Tensor raw, float bound);
 
+// x [B, M, 3] (or [M, 3]) in the coordinates of one box per batch, box [B, 6] (or [6]) rows
+// (c, l): y = (x - c) exp(l) per axis, so the box c +- exp(-l) becomes [-1, 1]^3 and zeros
+// are the identity. Differentiable in x; the box is a constant (no gradient).
+Tensor box_coordinates(Tensor x, Tensor box);
+
 }  // namespace nova
