@@ -76,7 +76,7 @@ __kernel void bounded_offset_back(__global const float* raw, __global const floa
 // out = (x - c) exp(l) per axis, with box row b = (c, l) of batch b (rows [B, M, 3]): a
 // rigid object's canonical position in the coordinates of its own box.
 __kernel void box_coordinates(__global const float* x, __global const float* box, __global float* out,
-                              uint rows, uint n, int unused) {
+                              uint rows, uint n) {
   const uint i = get_global_id(0);
   if (i >= n) return;
   __global const float* b = box + (size_t)(i / (rows * 3)) * 6;

@@ -139,7 +139,7 @@ void Trainer::ensure_phase() {
     e->set(g->motion, start.rows);
     for (Tensor p : g->graph.parameters())
       if (p.info().name == kObjectBoxName)
-        e->set(p, std::vector<float>(start.boxes.begin(), start.boxes.begin() + static_cast<long>(p.shape().numel())));
+        e->set(p, start.boxes);
   }
   exec_.reset();
   graph_ = std::move(g);

@@ -13,11 +13,17 @@ class BoxCoordinatesOp final : public Op {
   BoxCoordinatesOp(size_t nets, size_t rows) : nets_(nets), rows_(rows) {}
   std::string type() const override { return "box_coordinates"; }
 
-  void forward(ExecContext& ctx) override { run(ctx, "box_coordinates", ctx.in(0), ctx.out(0), false); }
+  void forward(ExecContext& ctx) override {
+    const size_t rows = ctx.in_rows(0, rows_);
+    if (rows == 0) return;
+    launch(ctx, "box_coordinates", ctx.in(0), ctx.out(0), rows).run(nets_ * rows * 3);
+  }
 
   void backward(ExecContext& ctx) override {
     cl_mem dy = ctx.grad_out(0), dx = ctx.grad_in(0);
-    if (dy && dx) run(ctx, "box_coordinates_back", dy, dx, ctx.accumulate_in(0));
+    const size_t rows = ctx.in_rows(0, rows_);
+    if (!dy || !dx || rows == 0) return;
+    launch(ctx, "box_coordinates_back", dy, dx, rows).arg(static_cast<int>(ctx.accumulate_in(0))).run(nets_ * rows * 3);
   }
 
   std::vector<TensorId> saved_for_backward() const override { return {inputs()[1]}; }
@@ -25,13 +31,11 @@ class BoxCoordinatesOp final : public Op {
   bool differentiable_in(size_t index) const override { return index == 0; }
 
  private:
-  void run(ExecContext& ctx, const char* kernel, cl_mem x, cl_mem y, bool accumulate) {
-    const size_t rows = ctx.in_rows(0, rows_);
-    if (rows == 0) return;
-    ctx.launch("tensor", kernel)
+  // The arguments both kernels share: x (or dy), the box, the output, rows per box, elements.
+  Launch launch(ExecContext& ctx, const char* kernel, cl_mem x, cl_mem y, size_t rows) const {
+    return ctx.launch("tensor", kernel)
         .arg(x).arg(ctx.in(1)).arg(y).arg(detail::u32(rows, "box rows"))
-        .arg(detail::u32(nets_ * rows * 3, "box elements")).arg(static_cast<int>(accumulate))
-        .run(nets_ * rows * 3);
+        .arg(detail::u32(nets_ * rows * 3, "box elements"));
   }
 
   size_t nets_, rows_;
