@@ -1,4 +1,4 @@
-// `nova-bench motion`: the rigid objects' starting motion (motion_alignment.hpp, as
+// `nova-bench motion`: the rigid objects' starting motion (track_object, motion_alignment.hpp, as
 // initial_motion chains it) against the synthetic family's exact object poses. Per seed and
 // object: the true turn per frame, the found turn's error per frame pair (mean, worst) and the
 // drift of the chained turn by the last frame that shows the object. Depth is the disparity
@@ -80,7 +80,8 @@ Mat3 trained_turn(const std::vector<float>& rows, int frames, int k, int a, int 
   return multiply(transpose(euler_xyz_to_matrix(angles(b))), euler_xyz_to_matrix(angles(a)));
 }
 
-std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact_depth, const std::string& run) {
+std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact_depth, const std::string& run,
+                                   const AlignmentOptions& options) {
   const Scene scene = load_scene(dir);
   const SynthWorld world("family", uint32_t(seed));
   const int F = int(scene.frames.size());
@@ -139,23 +140,26 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
     std::vector<int> seen;
     for (int i = 0; i < F; ++i)
       if (mask_pixels(scene.frames[size_t(i)].masks.at(size_t(k))) >= 8) seen.push_back(i);
-    Mat3 chain{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::vector<ObjectView> views;
+    std::vector<Vec3> anchors;
+    for (int i : seen) {
+      const Frame& f = scene.frames[size_t(i)];
+      views.push_back({&f.camera, &f.rgb, &f.masks.at(size_t(k)), &depth[size_t(i)]});
+      anchors.push_back(centroid_at_median_depth(f, depth[size_t(i)], f.masks.at(size_t(k))));
+    }
+    const std::vector<Mat34> poses = track_object(views, anchors, options);
     for (size_t j = 1; j < seen.size(); ++j) {
       const int a = seen[j - 1], b = seen[j];
-      const Frame &fa = scene.frames[size_t(a)], &fb = scene.frames[size_t(b)];
-      const ObjectView va{&fa.camera, &fa.rgb, &fa.masks.at(size_t(k)), &depth[size_t(a)]};
-      const ObjectView vb{&fb.camera, &fb.rgb, &fb.masks.at(size_t(k)), &depth[size_t(b)]};
-      const Vec3 pa = centroid_at_median_depth(fa, depth[size_t(a)], *va.mask);
-      const Vec3 pb = centroid_at_median_depth(fb, depth[size_t(b)], *vb.mask);
-      const Mat3 found = rotation_of(align_object(va, vb, {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}).motion);
+      const Mat3 found = multiply(rotation_of(poses[j]), transpose(rotation_of(poses[j - 1])));
       const Mat3 truth = true_turn(k, a, b);
       const double e = degrees(multiply(found, transpose(truth)));
       s.true_turn += degrees(truth) / (b - a);
       s.mean_error += e;
       s.worst_error = std::max(s.worst_error, e);
-      chain = multiply(found, chain);
       ++s.pairs;
     }
+    const Mat3 chain = seen.empty() ? Mat3{1, 0, 0, 0, 1, 0, 0, 0, 1}
+                                    : multiply(rotation_of(poses.back()), transpose(rotation_of(poses.front())));
     if (!trained.empty() && seen.size() > 1) {
       s.trained_error = s.trained_drift = 0;
       for (size_t j = 1; j < seen.size(); ++j)
@@ -179,14 +183,18 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
                  "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
-                 "trajectories of DIR/family-S (nova-bench accuracy's OUT/runs)\n";
+                 "trajectories of DIR/family-S (nova-bench accuracy's OUT/runs); --window N: earlier frames each frame "
+                 "is aligned to at once\n";
     return 0;
   }
   const std::string runs = o.str("runs");
+  AlignmentOptions options;
+  options.window = static_cast<int>(o.integer("window"));
+  if (options.window < 1) throw Error("nova-bench motion: option 'window' must be at least 1, not " + o.str("window"));
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");
@@ -199,7 +207,7 @@ int motion(const Args& args) {
     write_synthetic_scene(dir.string(), "family", uint32_t(seed));
     const auto t0 = std::chrono::steady_clock::now();
     const std::string run = runs.empty() ? "" : runs + "/family-" + std::to_string(seed);
-    const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"), run);
+    const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"), run, options);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (const ObjectScore& s : scores) {
       std::printf("%5d %7d %6d %12.2f %11.2f %11.2f %8.1f / %7.1f %8.1f", s.seed, s.object, s.pairs, s.true_turn,

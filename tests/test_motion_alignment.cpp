@@ -83,6 +83,113 @@ BOOST_AUTO_TEST_CASE(identical_views_do_not_move) {
   for (int k : {3, 7, 11}) BOOST_TEST(std::fabs(al.motion[static_cast<size_t>(k)]) < 1e-6);
 }
 
+namespace {
+
+// The rotation R1 R0^T of a move from pose p0 to pose p1 (object -> world).
+Mat3 turn_between(const Pose34& p0, const Pose34& p1) {
+  const Mat3 r0 = rotation_of(p0), r1 = rotation_of(p1);
+  Mat3 t{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int l = 0; l < 3; ++l) t[static_cast<size_t>(i * 3 + j)] += r1[static_cast<size_t>(i * 3 + l)] * r0[static_cast<size_t>(j * 3 + l)];
+  return t;
+}
+
+// Frames first.. first + count - 1 of the default synthetic scene, rendered with exact depth.
+struct Video {
+  const SynthWorld world{"default", 0};
+  std::vector<Camera> cameras;
+  std::vector<SynthRender> renders;
+  std::vector<double> times;
+  Video(int first, int count) {
+    const int F = world.preset().frames;
+    for (int i = first; i < first + count; ++i) {
+      times.push_back(frame_time(i, F));
+      cameras.push_back(world.camera(i));
+      renders.push_back(world.render(cameras.back(), times.back()));
+    }
+  }
+  std::vector<ObjectView> views(int k) const {
+    std::vector<ObjectView> v;
+    for (size_t i = 0; i < renders.size(); ++i)
+      v.push_back({&cameras[i], &renders[i].rgb, &renders[i].masks[static_cast<size_t>(k)], &renders[i].depth});
+    return v;
+  }
+  // The object's centre in every frame, off by 0.03 (as the masks' anchors would be).
+  std::vector<Vec3> anchors(int k) const {
+    std::vector<Vec3> a;
+    for (double t : times) {
+      const Pose34 p = world.object_pose(k, t);
+      a.push_back({p[3] + 0.03, p[7] - 0.03, p[11]});
+    }
+    return a;
+  }
+};
+
+}  // namespace
+
+// With one view back, tracking is the frame pairs' alignments chained: the same poses, bit
+// for bit.
+BOOST_AUTO_TEST_CASE(tracking_one_view_back_chains_the_pairs) {
+  const Video video(0, 4);
+  const std::vector<ObjectView> views = video.views(1);
+  const std::vector<Vec3> anchors = video.anchors(1);
+  const std::vector<Mat34> poses = track_object(views, anchors);
+  BOOST_TEST_REQUIRE(poses.size() == views.size());
+  Mat34 pose{1, 0, 0, anchors[0][0], 0, 1, 0, anchors[0][1], 0, 0, 1, anchors[0][2]};
+  for (size_t j = 0; j < views.size(); ++j) {
+    if (j > 0) {
+      const Vec3 shift{anchors[j][0] - anchors[j - 1][0], anchors[j][1] - anchors[j - 1][1], anchors[j][2] - anchors[j - 1][2]};
+      pose = compose_rigid(align_object(views[j - 1], views[j], shift).motion, pose);
+    }
+    for (size_t e = 0; e < 12; ++e) BOOST_TEST(poses[j][e] == pose[e]);
+  }
+}
+
+// Several views aligned at once to the next frame: frame 2 of the default scene against frame
+// 1 and frame 0 placed where the object stood in frame 1 (by the true move). Measured: the
+// striped sphere 2.7 degrees off the true turn and 0.014 off its centre, the box 0.26 and
+// 0.0007; bounds as the two-view test's (about twice the worst, for other compilers' rounding
+// along the same Levenberg-Marquardt path).
+BOOST_AUTO_TEST_CASE(placed_views_align_together) {
+  const Video video(0, 3);
+  for (int k = 1; k <= video.world.objects(); ++k) {
+    const std::vector<ObjectView> views = video.views(k);
+    const Pose34 p0 = video.world.object_pose(k, video.times[0]), p1 = video.world.object_pose(k, video.times[1]),
+                 p2 = video.world.object_pose(k, video.times[2]);
+    // Frame 0's world -> frame 1's world: p1 p0^-1 (a pose is a rigid 3 x 4 map).
+    const std::vector<PlacedView> earlier{{views[1], {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}},
+                                          {views[0], compose_rigid(p1, invert_rigid(p0))}};
+    const Vec3 guess{p2[3] - p1[3] + 0.05, p2[7] - p1[7], p2[11] - p1[11] - 0.05};
+    const ObjectAlignment al = align_object(earlier, views[2], guess);
+    const double error = angle_between(rotation_of(al.motion), turn_between(p1, p2));
+    const Vec3 centre = apply_rigid(al.motion, {p1[3], p1[7], p1[11]});
+    const double miss = std::hypot(centre[0] - p2[3], centre[1] - p2[7], centre[2] - p2[11]);
+    BOOST_TEST_MESSAGE("object " << k << " from frames 0, 1 to 2: turn off by " << error / kDegree
+                                 << " degrees, centre by " << miss << ", " << al.points << " points");
+    BOOST_TEST(al.points > 200);
+    BOOST_TEST(error < 3.5 * kDegree);
+    BOOST_TEST(miss < 0.04);
+  }
+}
+
+// Tracking three views back along the default scene's first 8 frames: the chained turn's
+// drift by the last frame against the world's (50 and 42 degrees of turn). Measured: the
+// sphere 6.3 degrees, the box 0.48 (one view back: 4.7 and 0.67); bound 12, twice the worst.
+BOOST_AUTO_TEST_CASE(tracking_several_views_back_keeps_the_turn) {
+  const Video video(0, 8);
+  for (int k = 1; k <= video.world.objects(); ++k) {
+    AlignmentOptions options;
+    options.window = 3;
+    const std::vector<Mat34> poses = track_object(video.views(k), video.anchors(k), options);
+    const Pose34 first = video.world.object_pose(k, video.times.front()), last = video.world.object_pose(k, video.times.back());
+    const double drift = angle_between(turn_between(poses.front(), poses.back()), turn_between(first, last));
+    BOOST_TEST_MESSAGE("object " << k << ": drift by frame 7 " << drift / kDegree << " degrees of "
+                                 << angle_between(turn_between(first, last), {1, 0, 0, 0, 1, 0, 0, 0, 1}) / kDegree);
+    BOOST_TEST(drift < 12 * kDegree);
+  }
+}
+
 // Euler angles: the matrix of the angles found is the matrix given (both solutions and any
 // 2 pi shift describe it), and the one nearest `near` is taken, so a spin stays continuous.
 BOOST_AUTO_TEST_CASE(euler_angles_round_trip_and_stay_near) {

@@ -8,10 +8,13 @@
 #include <array>
 #include <cmath>
 
+#include "nova/runtime/error.hpp"
 #include "train/float_plane.hpp"
 
 namespace nova {
 namespace {
+
+constexpr Mat34 kIdentity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
 
 Mat3 rodrigues(const Vec3& w) {
   const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
@@ -24,7 +27,8 @@ Mat3 rodrigues(const Vec3& w) {
 struct Point {
   Vec3 x;
   std::array<double, 3> colour;
-  double px, py;  // its pixel in view a
+  double px, py;  // its pixel in its own view
+  int view = 0;    // which of the placed views it comes from
 };
 
 // Solves the 6x6 system A d = b (Gaussian elimination with partial pivoting); false if singular.
@@ -54,25 +58,15 @@ constexpr int kResiduals = 5;  // per point: 3 colour, 1 depth, 1 mask
 
 class Aligner {
  public:
-  Aligner(const ObjectView& a, const ObjectView& b, const AlignmentOptions& o) : a_(a), b_(b), o_(o) {
-    const Image8& m = *a.mask;
-    const ImageF& d = *a.depth;
-    auto inside = [&](int x, int y) {
-      return x > 0 && y > 0 && x < m.width - 1 && y < m.height - 1 && m.at(x, y) >= 128 && m.at(x - 1, y) >= 128 &&
-             m.at(x + 1, y) >= 128 && m.at(x, y - 1) >= 128 && m.at(x, y + 1) >= 128;
-    };
-    size_t count = 0;
-    for (int y = 0; y < m.height; ++y)
-      for (int x = 0; x < m.width; ++x) count += inside(x, y);
-    const int stride = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count) / std::max(o.max_points, 1)))));
-    for (int y = 0; y < m.height; y += stride)
-      for (int x = 0; x < m.width; x += stride) {
-        const float z = d.data[static_cast<size_t>(y) * d.width + x];
-        if (!inside(x, y) || !(z > 0) || !std::isfinite(z)) continue;
-        points_.push_back({camera_unproject(*a.camera, x, y, z), {}, static_cast<double>(x), static_cast<double>(y)});
-      }
+  Aligner(const std::vector<PlacedView>& a, const ObjectView& b, const AlignmentOptions& o) : a_(a), b_(b), o_(o) {
+    for (size_t v = 0; v < a.size(); ++v) add_points(a[v], static_cast<int>(v));
+    // The turn is about the reference view's centroid (all points' where it has none).
+    const bool reference = std::any_of(points_.begin(), points_.end(), [](const Point& p) { return p.view == 0; });
+    const double n = static_cast<double>(std::max<long>(
+        std::count_if(points_.begin(), points_.end(), [&](const Point& p) { return p.view == 0 || !reference; }), 1));
     for (const Point& p : points_)
-      for (int k = 0; k < 3; ++k) centre_[k] += p.x[k] / static_cast<double>(std::max<size_t>(points_.size(), 1));
+      if (p.view == 0 || !reference)
+        for (int k = 0; k < 3; ++k) centre_[k] += p.x[k] / n;
     for (const Point& p : points_)
       for (int k = 0; k < 3; ++k) size_ += (p.x[k] - centre_[k]) * (p.x[k] - centre_[k]);
     size_ = std::sqrt(size_ / static_cast<double>(std::max<size_t>(points_.size(), 1)));
@@ -81,13 +75,16 @@ class Aligner {
   size_t points() const { return points_.size(); }
   const Vec3& centre() const { return centre_; }
 
-  // Sets the blur level: the images of both views and the points' colours.
+  // Sets the blur level: the second view's images and the points' colours.
   void level(double sigma) {
-    const FloatPlane ia = blurred_plane(*a_.rgb, sigma);
     rgb_ = blurred_plane(*b_.rgb, sigma);
     mask_ = blurred_plane(*b_.mask, sigma);
-    for (Point& p : points_)
-      for (int c = 0; c < 3; ++c) p.colour[static_cast<size_t>(c)] = ia.sample(p.px, p.py, c);
+    for (size_t v = 0; v < a_.size(); ++v) {
+      const FloatPlane ia = blurred_plane(*a_[v].view.rgb, sigma);
+      for (Point& p : points_)
+        if (p.view == static_cast<int>(v))
+          for (int c = 0; c < 3; ++c) p.colour[static_cast<size_t>(c)] = ia.sample(p.px, p.py, c);
+    }
   }
 
   // The residuals of every point under parameters q (turn, translation): kResiduals per point.
@@ -203,7 +200,29 @@ class Aligner {
   }
 
  private:
-  const ObjectView& a_;
+  // The interior pixels of one view with a known depth (about max_points of them), placed in
+  // the reference frame by the view's map.
+  void add_points(const PlacedView& pv, int view) {
+    const Image8& m = *pv.view.mask;
+    const ImageF& d = *pv.view.depth;
+    auto inside = [&](int x, int y) {
+      return x > 0 && y > 0 && x < m.width - 1 && y < m.height - 1 && m.at(x, y) >= 128 && m.at(x - 1, y) >= 128 &&
+             m.at(x + 1, y) >= 128 && m.at(x, y - 1) >= 128 && m.at(x, y + 1) >= 128;
+    };
+    size_t count = 0;
+    for (int y = 0; y < m.height; ++y)
+      for (int x = 0; x < m.width; ++x) count += inside(x, y);
+    const int stride = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count) / std::max(o_.max_points, 1)))));
+    for (int y = 0; y < m.height; y += stride)
+      for (int x = 0; x < m.width; x += stride) {
+        const float z = d.data[static_cast<size_t>(y) * d.width + x];
+        if (!inside(x, y) || !(z > 0) || !std::isfinite(z)) continue;
+        const Vec3 world = camera_unproject(*pv.view.camera, x, y, z);
+        points_.push_back({apply_rigid(pv.to_reference, world), {}, static_cast<double>(x), static_cast<double>(y), view});
+      }
+  }
+
+  const std::vector<PlacedView>& a_;
   const ObjectView& b_;
   const AlignmentOptions& o_;
   std::vector<Point> points_;
@@ -214,14 +233,15 @@ class Aligner {
 
 }  // namespace
 
-ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec3& translation,
+ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView& b, const Vec3& translation,
                              const AlignmentOptions& options) {
   ObjectAlignment out;
+  if (a.empty()) return out;
   Aligner al(a, b, options);
   out.points = static_cast<int>(al.points());
   std::array<double, 6> q{0, 0, 0, translation[0], translation[1], translation[2]};
   if (al.points() >= 8) {
-    const double scale = a.rgb->width / 160.0;
+    const double scale = b.rgb->width / 160.0;
     double cost = 0;
     for (double sigma : options.blur_px) {
       al.level(sigma * scale);
@@ -241,6 +261,35 @@ ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec
   }
   out.turn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
   return out;
+}
+
+ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec3& translation,
+                             const AlignmentOptions& options) {
+  return align_object(std::vector<PlacedView>{{a, kIdentity}}, b, translation, options);
+}
+
+std::vector<Mat34> track_object(const std::vector<ObjectView>& views, const std::vector<Vec3>& anchors,
+                                const AlignmentOptions& options) {
+  if (anchors.size() != views.size()) throw Error("track_object: " + std::to_string(views.size()) + " views but " +
+                                                  std::to_string(anchors.size()) + " anchors", kExitInternal);
+  std::vector<Mat34> poses;
+  poses.reserve(views.size());
+  for (size_t j = 0; j < views.size(); ++j) {
+    if (j == 0) {
+      Mat34 first = kIdentity;
+      for (int d = 0; d < 3; ++d) first[static_cast<size_t>(d * 4 + 3)] = anchors[0][static_cast<size_t>(d)];
+      poses.push_back(first);
+      continue;
+    }
+    // The last `window` views, each placed where the object stood in view j - 1.
+    std::vector<PlacedView> earlier;
+    for (size_t i = j; i-- > 0 && earlier.size() < static_cast<size_t>(std::max(options.window, 1));)
+      earlier.push_back({views[i], i + 1 == j ? kIdentity : compose_rigid(poses[j - 1], invert_rigid(poses[i]))});
+    Vec3 shift{};
+    for (int d = 0; d < 3; ++d) shift[static_cast<size_t>(d)] = anchors[j][static_cast<size_t>(d)] - anchors[j - 1][static_cast<size_t>(d)];
+    poses.push_back(compose_rigid(align_object(earlier, views[j], shift, options).motion, poses[j - 1]));
+  }
+  return poses;
 }
 
 }  // namespace nova

@@ -213,26 +213,27 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
     // The object's pose (object -> world) at every frame that shows it: the first at its
     // anchor, unturned; each next one the previous moved by the alignment of the two frames
     // (without depth to place the pixels by, no turn: anchor to anchor).
-    std::vector<std::array<double, 6>> known_rows;
-    Mat34 pose{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
-    for (int d = 0; d < 3; ++d) pose[static_cast<size_t>(d * 4 + 3)] = (*anchor[static_cast<size_t>(known[0])])[d];
-    Vec3 angles{0, 0, 0};
-    for (size_t j = 0; j < known.size(); ++j) {
-      const size_t g = static_cast<size_t>(known[j]);
-      if (j > 0) {
-        const size_t f = static_cast<size_t>(known[j - 1]);
-        Mat34 step{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
-        for (int d = 0; d < 3; ++d) step[static_cast<size_t>(d * 4 + 3)] = (*anchor[g])[d] - (*anchor[f])[d];
-        if (fitted) {
-          const Frame& fa = scene.frames[frame_of[f]];
-          const Frame& fb = scene.frames[frame_of[g]];
-          const ObjectView va{&fa.camera, &fa.rgb, &fa.masks.at(static_cast<size_t>(k)), &depth[frame_of[f]]};
-          const ObjectView vb{&fb.camera, &fb.rgb, &fb.masks.at(static_cast<size_t>(k)), &depth[frame_of[g]]};
-          const Vec3 shift{step[3], step[7], step[11]};
-          step = align_object(va, vb, shift).motion;
-        }
-        pose = compose_rigid(step, pose);
+    std::vector<Mat34> poses;
+    if (fitted) {
+      std::vector<ObjectView> views;
+      std::vector<Vec3> anchors;
+      for (int i : known) {
+        const size_t f = frame_of[static_cast<size_t>(i)];
+        const Frame& frame = scene.frames[f];
+        views.push_back({&frame.camera, &frame.rgb, &frame.masks.at(static_cast<size_t>(k)), &depth[f]});
+        anchors.push_back(*anchor[static_cast<size_t>(i)]);
       }
+      poses = track_object(views, anchors);
+    } else {
+      for (int i : known) {
+        Mat34 pose{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+        for (int d = 0; d < 3; ++d) pose[static_cast<size_t>(d * 4 + 3)] = (*anchor[static_cast<size_t>(i)])[d];
+        poses.push_back(pose);
+      }
+    }
+    std::vector<std::array<double, 6>> known_rows;
+    Vec3 angles{0, 0, 0};
+    for (const Mat34& pose : poses) {
       // y = R (x - tau) + q with R the pose's rotation transposed and tau its translation.
       const Mat3 R{pose[0], pose[4], pose[8], pose[1], pose[5], pose[9], pose[2], pose[6], pose[10]};
       angles = matrix_to_euler_xyz(R, angles);

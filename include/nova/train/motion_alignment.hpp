@@ -30,6 +30,7 @@ struct AlignmentOptions {
   double depth_weight = 1.0;    // a relative depth error of 10 % weighs as a colour error of 0.1
   double mask_weight = 0.5;     // a point outside the second mask weighs as a colour error of 0.5
   double turn_prior = 1e-3;     // damping towards no turn (per radian squared), for textureless objects
+  int window = 1;               // track_object: earlier views aligned at once to each next one
 };
 
 struct ObjectAlignment {
@@ -43,5 +44,25 @@ struct ObjectAlignment {
 // translates; `translation` is the starting translation (e.g. the shift of the masks' anchors).
 ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec3& translation,
                              const AlignmentOptions& options = {});
+
+// One view of the object with the rigid map (world -> world) that moves its points to where
+// the object stood in the reference view, the one the motion starts from.
+struct PlacedView {
+  ObjectView view;
+  Mat34 to_reference{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+};
+
+// The same with several views of the object at once, the first the reference: each view's
+// points are placed in the reference by its map and all of them are moved together, so a
+// view further back (a larger turn away) also constrains the turn.
+ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView& b, const Vec3& translation,
+                             const AlignmentOptions& options = {});
+
+// The object's pose (object -> world) in every view of a video, the first at anchors[0]
+// unturned: each next view is aligned to the last `options.window` views placed by their
+// poses, starting from the shift between the two latest anchors (e.g. the masks' centroids
+// at their depth).
+std::vector<Mat34> track_object(const std::vector<ObjectView>& views, const std::vector<Vec3>& anchors,
+                                const AlignmentOptions& options = {});
 
 }  // namespace nova
