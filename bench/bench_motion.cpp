@@ -194,7 +194,7 @@ int motion(const Args& args) {
   const std::string runs = o.str("runs");
   AlignmentOptions options;
   options.window = static_cast<int>(o.integer("window"));
-  if (options.window < 1) throw Error("nova-bench motion: option 'window' must be at least 1, not " + o.str("window"));
+  if (options.window < 1) throw Error("option 'window' must be at least 1, not " + o.str("window"));
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");
