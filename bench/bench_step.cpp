@@ -1,8 +1,9 @@
 // nova-bench step: the training step itself, per preset (quick, reference), phase (static
 // pretraining, joint) and number of object NeRFs K, on a scene of the user's: seconds per
 // step and rays/s over timed steps after a warm-up, the device memory of the step (memory
-// plan, parameters, gradients, Adam) and the process's peak RSS, then a per-op table from a
-// few profiled steps. Occupancy skipping is off (its warm-up would need a trained model): the
+// plan, parameters, gradients, Adam), the process's peak RSS and the commands each step puts on
+// the queue (kernels, CLBlast calls, host calls, memory commands: Runtime::commands), then a
+// per-op table from a few profiled steps. Occupancy skipping is off (its warm-up would need a trained model): the
 // numbers are those of the dense step, the most a step costs. With --run RUN the bench instead
 // continues a trained run (its configuration, weights, occupancy grids and phase): the step a
 // long training takes once its grids skip empty space. With --anchor DIR it alternates nova's
@@ -58,6 +59,7 @@ struct Row {
   int objects = 0, rays = 0, samples = 0;
   double seconds = 0, device_mb = 0, rss_mb = 0;
   double torch_seconds = 0;  // PyTorch's step of the same MLPs alone (0: not compared)
+  CommandCounts commands{};  // per timed step (rounded down)
 };
 
 // The MLPs of a step in PyTorch: the preset's static trunk (its encoded input, depth x width,
@@ -85,14 +87,23 @@ std::unique_ptr<TorchPeer> torch_for(const std::string& python, const TrainConfi
 // report ends one nova step (its device work done), the peer then runs one step of its own,
 // and the times are medians; `torch_seconds` gets the peer's, `per_step` every timed step's.
 double time_steps(Runtime& rt, Trainer& t, long warmup, long steps, TorchPeer* peer = nullptr,
-                  double* torch_seconds = nullptr, std::vector<double>* per_step = nullptr) {
+                  double* torch_seconds = nullptr, std::vector<double>* per_step = nullptr,
+                  CommandCounts* commands = nullptr) {
   t.run({}, t.step() + warmup);
   rt.finish();
+  rt.reset_commands();
+  const auto per_step_commands = [&] {
+    if (!commands) return;
+    const CommandCounts& c = rt.commands();
+    const auto n = static_cast<size_t>(steps);
+    *commands = {c.kernels / n, c.library / n, c.host / n, c.memory / n};
+  };
   using clock = std::chrono::steady_clock;
   auto a = clock::now();
   if (!peer && !per_step) {
     auto b = a;
     t.run([&](const TrainProgress&) { b = clock::now(); }, t.step() + steps);
+    per_step_commands();
     return std::chrono::duration<double>(b - a).count() / static_cast<double>(steps);
   }
   std::vector<double> nova_s, torch_s;
@@ -103,6 +114,7 @@ double time_steps(Runtime& rt, Trainer& t, long warmup, long steps, TorchPeer* p
         a = clock::now();
       },
       t.step() + steps);
+  per_step_commands();
   if (peer) *torch_seconds = median(torch_s);
   if (per_step) *per_step = nova_s;
   return median(nova_s);
@@ -121,7 +133,8 @@ void print_row(const Row& r) {
   std::cout << std::left << std::setw(10) << r.preset << std::setw(9) << r.phase << "K=" << std::setw(3) << r.objects
             << std::right << std::fixed << std::setprecision(3) << std::setw(9) << r.seconds << " s/step"
             << std::setprecision(0) << std::setw(9) << r.rays / r.seconds << " rays/s" << std::setw(8)
-            << r.device_mb << " MB device" << std::setw(7) << r.rss_mb << " MB peak RSS";
+            << r.device_mb << " MB device" << std::setw(7) << r.rss_mb << " MB peak RSS" << std::setw(6)
+            << r.commands.total() << " commands";
   if (r.torch_seconds > 0)
     std::cout << std::setprecision(3) << "   PyTorch, its MLPs alone: " << r.torch_seconds << " s/step (nova / PyTorch "
               << std::setprecision(2) << r.torch_seconds / r.seconds << ")";
@@ -131,12 +144,14 @@ void print_row(const Row& r) {
 void write_csv(const std::vector<Row>& rows, const std::string& out, const std::string& profiles) {
   std::ostringstream csv;
   csv << "preset,phase,objects,rays,samples,seconds_per_step,rays_per_second,device_mb,peak_rss_mb,"
-         "torch_mlps_seconds_per_step\n";
+         "torch_mlps_seconds_per_step,kernels_per_step,clblast_calls_per_step,host_calls_per_step,"
+         "memory_commands_per_step\n";
   for (const Row& r : rows) {
     csv << r.preset << "," << r.phase << "," << r.objects << "," << r.rays << "," << r.samples << "," << r.seconds
         << "," << r.rays / r.seconds << "," << r.device_mb << "," << r.rss_mb << ",";
     if (r.torch_seconds > 0) csv << r.torch_seconds;
-    csv << "\n";
+    csv << "," << r.commands.kernels << "," << r.commands.library << "," << r.commands.host << ","
+        << r.commands.memory << "\n";
   }
   std::cout << "\n" << csv.str() << profiles;
   if (!out.empty()) {
@@ -192,7 +207,7 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
     if (!peer) std::cout << "PyTorch: not compared (" << why << ")\n";
     r = Row{files.config.preset, joint ? "joint" : "pretrain", joint ? scene.num_objects : 0, files.config.rays,
             files.config.samples};
-    r.seconds = time_steps(rt, *t, warmup, steps, peer.get(), &r.torch_seconds);
+    r.seconds = time_steps(rt, *t, warmup, steps, peer.get(), &r.torch_seconds, nullptr, &r.commands);
     r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
   }
   r.rss_mb = peak_rss_mb();
@@ -229,7 +244,7 @@ Row time_row(Runtime& rt, const Scene& s, const TrainConfig& preset, const std::
   told_torch = true;
   if (peer || per_step) c.log_every = 1;  // a report after every step, where PyTorch takes its turn
   Trainer t(rt, s, c, dir.string());
-  r.seconds = time_steps(rt, t, warmup, steps, peer.get(), &r.torch_seconds, per_step);
+  r.seconds = time_steps(rt, t, warmup, steps, peer.get(), &r.torch_seconds, per_step, &r.commands);
   r.device_mb = static_cast<double>(t.device_bytes()) / (1024.0 * 1024.0);
   r.rss_mb = peak_rss_mb();
   return r;
@@ -324,8 +339,9 @@ int step(const Args& args) {
   const Options o(args, step_defaults(args));
   if (o.help()) {
     std::cout << o.usage("nova-bench step")
-              << "\nSeconds per training step (occupancy skipping off: the dense step), device memory and peak\n"
-                 "RSS, per preset and phase, then a per-op profile.\n\n"
+              << "\nSeconds per training step (occupancy skipping off: the dense step), device memory, peak\n"
+                 "RSS and commands enqueued per step (kernels, CLBlast calls, host calls, memory commands; the\n"
+                 "CSV splits them), per preset and phase, then a per-op profile.\n\n"
                  "--scene: the scene folder to step on (required unless --run)\n"
                  "--presets: comma list of presets (quick, reference)\n"
                  "--objects: numbers of object NeRFs K (the scene's first K)\n"

@@ -187,6 +187,36 @@ BOOST_AUTO_TEST_CASE(fresh_outputs_and_reused_memory) {
 
 // The host BLAS runs where the device is a CPU with native kernels and a BLAS was found; a
 // device without them names what is missing instead of computing anything.
+// Each provider's commands are counted under their kind (what nova-bench step reports per
+// step): a CLBlast call, this runtime's kernels, or one host call; memory commands apart.
+BOOST_AUTO_TEST_CASE(commands_are_counted_by_kind) {
+  Runtime& rt = test::runtime();
+  const GemmProvider chosen = gemm_provider(rt);
+  const size_t m = 37, n = 29, k = 45;
+  Buffer a = rt.upload_floats(test::random_floats(m * k, -1, 1, 1));
+  Buffer b = rt.upload_floats(test::random_floats(k * n, -1, 1, 2));
+  Buffer c = rt.alloc(m * n * sizeof(float));
+  GemmArgs g{false, false, m, n, k, 1.0f, a.get(), k, m * k, b.get(), n, k * n, 0.0f, c.get(), n, m * n, 1};
+  for (GemmProvider p : providers()) {
+    set_gemm_provider(rt, p);
+    Buffer temp;
+    if (size_t bytes = gemm_temp_bytes(rt, g)) temp = rt.alloc(bytes);
+    rt.finish();
+    rt.reset_commands();
+    nova::gemm(rt, g, temp.get());
+    rt.fill_zero(temp ? temp.get() : c.get(), sizeof(float));
+    rt.finish();
+    const CommandCounts counted = rt.commands();
+    BOOST_TEST_INFO(gemm_provider_name(p));
+    BOOST_TEST(counted.library == (p == GemmProvider::CLBlast ? 1u : 0u));
+    BOOST_TEST(counted.host == (p == GemmProvider::Host ? 1u : 0u));
+    if (p == GemmProvider::Kernels) BOOST_TEST(counted.kernels >= 1u);
+    BOOST_TEST(counted.memory >= 1u);
+    BOOST_TEST(counted.total() == counted.kernels + counted.library + counted.host + counted.memory);
+  }
+  set_gemm_provider(rt, chosen);
+}
+
 BOOST_AUTO_TEST_CASE(host_provider_availability) {
   Runtime& rt = test::runtime();
   if (host_gemm_available(rt)) {

@@ -164,6 +164,7 @@ void tally(size_t& count, size_t& total, size_t& largest, size_t bytes) {
 void Runtime::upload(cl_mem dst, const void* src, size_t bytes, size_t offset) {
   if (bytes == 0) return;
   tally(transfers_.writes, transfers_.write_bytes, transfers_.largest_write, bytes);
+  ++commands_.memory;
   cl_check(clEnqueueWriteBuffer(queue_, dst, CL_TRUE, offset, bytes, src, 0, nullptr, nullptr),
            "clEnqueueWriteBuffer");
 }
@@ -181,6 +182,7 @@ void Runtime::upload_async(cl_mem dst, const void* src, size_t bytes, size_t off
   auto* block = new unsigned char[bytes];
   std::memcpy(block, src, bytes);
   cl_event done = nullptr;
+  ++commands_.memory;
   const cl_int st = clEnqueueWriteBuffer(queue_, dst, CL_FALSE, offset, bytes, block, 0, nullptr, &done);
   if (st != CL_SUCCESS) {
     delete[] block;
@@ -198,6 +200,7 @@ void Runtime::upload_async(cl_mem dst, const void* src, size_t bytes, size_t off
 
 void Runtime::fill_floats(cl_mem dst, float value, size_t bytes, size_t offset) {
   if (bytes == 0) return;
+  ++commands_.memory;
   cl_check(clEnqueueFillBuffer(queue_, dst, &value, sizeof(value), offset, bytes, 0, nullptr, nullptr),
            "clEnqueueFillBuffer");
 }
@@ -205,6 +208,7 @@ void Runtime::fill_floats(cl_mem dst, float value, size_t bytes, size_t offset) 
 void Runtime::download(cl_mem src, void* dst, size_t bytes, size_t offset) {
   if (bytes == 0) return;
   tally(transfers_.reads, transfers_.read_bytes, transfers_.largest_read, bytes);
+  ++commands_.memory;
   cl_check(clEnqueueReadBuffer(queue_, src, CL_TRUE, offset, bytes, dst, 0, nullptr, nullptr),
            "clEnqueueReadBuffer");
 }
@@ -212,6 +216,7 @@ void Runtime::download(cl_mem src, void* dst, size_t bytes, size_t offset) {
 void Runtime::fill_zero(cl_mem dst, size_t bytes, size_t offset) {
   if (bytes == 0) return;
   const float zero = 0.0f;
+  ++commands_.memory;
   cl_check(clEnqueueFillBuffer(queue_, dst, &zero, sizeof(zero), offset, bytes, 0, nullptr,
                                nullptr),
            "clEnqueueFillBuffer");
@@ -276,6 +281,7 @@ void Launch::run(size_t n) {
   const size_t wg = rt_.work_group_size(kernel_);
   const size_t global = (n + wg - 1) / wg * wg;
   rt_.note_launch(kernel_, 1, &n, &wg);
+  rt_.count_kernel();
   cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 1, nullptr, &global, &wg, 0, nullptr,
                                   nullptr),
            "clEnqueueNDRangeKernel");
@@ -297,6 +303,7 @@ void Launch::run2(size_t n0, size_t n1, size_t max_group, size_t max0) {
   const size_t global[2] = {(n0 + l0 - 1) / l0 * l0, (n1 + l1 - 1) / l1 * l1};
   const size_t size[2] = {n0, n1};
   rt_.note_launch(kernel_, 2, size, local);
+  rt_.count_kernel();
   cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 2, nullptr, global, local, 0, nullptr,
                                   nullptr),
            "clEnqueueNDRangeKernel");

@@ -133,17 +133,21 @@ void clblast_split_gemm(Runtime& rt, size_t kc, size_t splits, const GemmArgs& g
   const size_t a_step = g.trans_a ? kc * g.lda : kc, b_step = g.trans_b ? kc : kc * g.ldb;
   for (size_t b = 0; b < g.batch; ++b) {
     const size_t a0 = b * g.stride_a, b0 = b * g.stride_b, c0 = b * g.m * g.n;
-    if (full > 0)
+    if (full > 0) {
+      rt.count_library_call();
       check(clblast::GemmStridedBatched(clblast::Layout::kRowMajor, tr(g.trans_a), tr(g.trans_b),
                                         g.m, g.n, kc, 1.0f, g.a, a0, g.lda, a_step, g.b, b0,
                                         g.ldb, b_step, 0.0f, temp, c0, g.n, plane, full,
                                         rt.queue_ptr(), nullptr),
             "clblast::GemmStridedBatched (split)", g);
-    if (rest > 0)
+    }
+    if (rest > 0) {
+      rt.count_library_call();
       check(clblast::Gemm(clblast::Layout::kRowMajor, tr(g.trans_a), tr(g.trans_b), g.m, g.n,
                           rest, 1.0f, g.a, a0 + full * a_step, g.lda, g.b, b0 + full * b_step,
                           g.ldb, 0.0f, temp, c0 + full * plane, g.n, rt.queue_ptr(), nullptr),
             "clblast::Gemm (split remainder)", g);
+    }
   }
   rt.launch("gemm", "gemm_reduce")
       .arg(temp).arg(0u).arg(g.c).arg(u32(g.m, "gemm m")).arg(u32(g.n, "gemm n"))
@@ -160,6 +164,7 @@ void clblast_gemm(Runtime& rt, const GemmConfig& cfg, const GemmArgs& g, cl_mem 
   apply_clblast_config(rt, cfg);
   if (const size_t splits = clblast_splits(cfg, g); splits > 1)
     return clblast_split_gemm(rt, cfg.params.at("KC"), splits, g, temp);
+  rt.count_library_call();
   if (g.batch == 1) {
     check(clblast::Gemm(clblast::Layout::kRowMajor, tr(g.trans_a), tr(g.trans_b), g.m, g.n, g.k,
                         g.alpha, g.a, 0, g.lda, g.b, 0, g.ldb, g.beta, g.c, 0, g.ldc,

@@ -38,6 +38,7 @@ void enqueue_native_bytes(Runtime& rt, void(CL_CALLBACK* fn)(void*), const void*
   for (cl_mem m : buffers)
     if (m && clRetainMemObject(m) == CL_SUCCESS) held->push_back(m);
   cl_event done = nullptr;
+  rt.count_host_call();
   const cl_int st = clEnqueueNativeKernel(rt.queue(), fn, const_cast<void*>(args), bytes, 0, nullptr,
                                           nullptr, 0, nullptr, &done);
   if (st != CL_SUCCESS) {

@@ -84,6 +84,16 @@ struct TransferStats {
   size_t writes = 0, write_bytes = 0, largest_write = 0;
 };
 
+// Commands put on a runtime's queue, by kind: on a GPU each costs microseconds of launch
+// overhead whatever its size, so their number per training step bounds a small step's pace.
+struct CommandCounts {
+  size_t kernels = 0;  // this runtime's own kernels
+  size_t library = 0;  // calls into CLBlast (each one or more kernels of its own, not seen here)
+  size_t host = 0;     // host functions on the queue (the host GEMM, the host bias gradient)
+  size_t memory = 0;   // fills, writes and reads
+  size_t total() const { return kernels + library + host + memory; }
+};
+
 // One kind of kernel launch, recorded when Runtime::record_launches is on: the kernel, the
 // problem size of each dimension (before rounding up) and the work-group size chosen for it.
 // Lets a test prove that every kernel ran at sizes that are no multiple of its work-group.
@@ -157,6 +167,13 @@ class Runtime {
   const std::set<LaunchRecord>& launches() const { return launches_; }
   void note_launch(cl_kernel kernel, size_t dims, const size_t* size, const size_t* local);
 
+  // Every command enqueued since the last reset (always counted: an increment each).
+  const CommandCounts& commands() const { return commands_; }
+  void reset_commands() { commands_ = {}; }
+  void count_library_call() { ++commands_.library; }
+  void count_host_call() { ++commands_.host; }
+  void count_kernel() { ++commands_.kernels; }
+
   Buffer alloc(size_t bytes);
   // A view of [offset, offset + bytes) of `parent`; offset must honour base_addr_align_bytes.
   Buffer sub_buffer(const Buffer& parent, size_t offset, size_t bytes);
@@ -190,6 +207,7 @@ class Runtime {
   std::map<cl_kernel, std::pair<std::string, std::string>> kernel_names_;  // family, name
   bool record_launches_ = false;
   TransferStats transfers_;
+  CommandCounts commands_;
   std::set<LaunchRecord> launches_;
 };
 
