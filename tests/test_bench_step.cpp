@@ -1,6 +1,7 @@
 // nova-bench step on the tiny synthetic scene: one row per phase and object count with a
 // positive step time and device memory in its CSV, a per-op table, and bad inputs refused
-// (exit code 2, a line naming the input, no CSV left behind). Where /usr/bin/python3 has torch,
+// (exit code 2, a line naming the input, no CSV left behind). Each row counts the commands
+// a step enqueues. Where /usr/bin/python3 has torch,
 // each row also has PyTorch's step of the same MLPs.
 #include <boost/test/unit_test.hpp>
 #include <cstdlib>
@@ -34,7 +35,8 @@ BOOST_AUTO_TEST_CASE(rows_for_each_phase_and_object_count, *boost::unit_test::pr
   std::string line;
   std::getline(lines, line);
   BOOST_TEST(line.rfind("preset,phase,objects,", 0) == 0u);
-  BOOST_TEST(line.find(",torch_mlps_seconds_per_step") != std::string::npos);
+  BOOST_TEST(line.find(",torch_mlps_seconds_per_step,kernels_per_step,clblast_calls_per_step,host_calls_per_step,"
+                       "memory_commands_per_step") != std::string::npos);
   const bool torch = std::system("/usr/bin/python3 -c 'import torch' >/dev/null 2>&1") == 0;
   std::vector<std::string> rows;
   while (std::getline(lines, line)) rows.push_back(line);
@@ -46,8 +48,10 @@ BOOST_AUTO_TEST_CASE(rows_for_each_phase_and_object_count, *boost::unit_test::pr
     std::vector<double> v;
     std::istringstream cells(row);
     for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::atof(cell.c_str()));
-    BOOST_REQUIRE(v.size() == (torch ? 10u : 9u));  // the PyTorch cell is empty without torch
-    if (torch) BOOST_TEST(v[9] > 0.0);              // PyTorch's MLPs, alternating
+    BOOST_REQUIRE(v.size() == 14u);     // the PyTorch cell is empty (0) without torch
+    if (torch) BOOST_TEST(v[9] > 0.0);  // PyTorch's MLPs, alternating
+    BOOST_TEST(v[10] + v[11] + v[12] >= 10.0);  // kernels, CLBlast and host calls: a step is many
+    BOOST_TEST(v[13] >= 1.0);                   // memory commands: at least the batch's upload
     BOOST_TEST(v[5] > 0.0);  // seconds per step
     BOOST_TEST(v[7] > 0.0);  // device MB
     BOOST_TEST(v[8] > 0.0);  // peak RSS MB
