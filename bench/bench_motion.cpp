@@ -183,18 +183,20 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
                  "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
                  "trajectories of DIR/family-S (nova-bench accuracy's OUT/runs); --window N: earlier frames each frame "
-                 "is aligned to at once\n";
+                 "is aligned to at once; --edge PX: pixels of each mask's rim left out\n";
     return 0;
   }
   const std::string runs = o.str("runs");
   AlignmentOptions options;
   options.window = static_cast<int>(o.integer("window"));
   if (options.window < 1) throw Error("option 'window' must be at least 1, not " + o.str("window"));
+  options.edge_px = o.number("edge");
+  if (!(options.edge_px >= 0)) throw Error("option 'edge' must be at least 0, not " + o.str("edge"));
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");

@@ -83,6 +83,38 @@ BOOST_AUTO_TEST_CASE(identical_views_do_not_move) {
   for (int k : {3, 7, 11}) BOOST_TEST(std::fabs(al.motion[static_cast<size_t>(k)]) < 1e-6);
 }
 
+// The rim of each mask is left out by edge_px: a wider margin keeps fewer pixels, and a mask
+// too thin to keep any gives no turn, only the starting translation.
+BOOST_AUTO_TEST_CASE(the_masks_rim_is_left_out) {
+  const SynthWorld w("default", 3);
+  const Camera c = w.camera(0);
+  const SynthRender r = w.render(c, -1.0);
+  int last = 1 << 30;
+  for (double edge : {1.0, 2.0, 4.0}) {
+    AlignmentOptions o;
+    o.edge_px = edge;
+    o.max_points = 1 << 20;    // every interior pixel, none skipped
+    const ObjectAlignment al = align_object({&c, &r.rgb, &r.masks[1], &r.depth}, {&c, &r.rgb, &r.masks[1], &r.depth},
+                                            {0, 0, 0}, o);
+    BOOST_TEST_MESSAGE("rim " << edge << " px: " << al.points << " points");
+    BOOST_TEST(al.points > 0);
+    BOOST_TEST(al.points < last);
+    last = al.points;
+  }
+  // A mask two pixels wide: nothing is three pixels inside it.
+  Image8 thin = r.masks[1];
+  std::fill(thin.data.begin(), thin.data.end(), uint8_t{0});
+  for (int y = 10; y < thin.height - 10; ++y)
+    for (int x = thin.width / 2; x < thin.width / 2 + 2; ++x) thin.at(x, y) = 255;
+  AlignmentOptions o;
+  o.edge_px = 3;
+  const Vec3 shift{0.01, -0.02, 0.03};
+  const ObjectAlignment al = align_object({&c, &r.rgb, &thin, &r.depth}, {&c, &r.rgb, &thin, &r.depth}, shift, o);
+  BOOST_TEST(al.points == 0);
+  BOOST_TEST(al.turn == 0.0);
+  for (int k = 0; k < 3; ++k) BOOST_TEST(al.motion[static_cast<size_t>(k * 4 + 3)] == shift[static_cast<size_t>(k)]);
+}
+
 namespace {
 
 // The rotation R1 R0^T of a move from pose p0 to pose p1 (object -> world).

@@ -205,9 +205,16 @@ class Aligner {
   void add_points(const PlacedView& pv, int view) {
     const Image8& m = *pv.view.mask;
     const ImageF& d = *pv.view.depth;
+    // A pixel within e pixels (city-block) of the mask's edge is left out: there the disparity
+    // mixes the object's depth with what lies behind it. A view left with too few pixels gives
+    // no turn (the anchors' shift alone).
+    const int e = std::max(1, static_cast<int>(std::lround(o_.edge_px)));
     auto inside = [&](int x, int y) {
-      return x > 0 && y > 0 && x < m.width - 1 && y < m.height - 1 && m.at(x, y) >= 128 && m.at(x - 1, y) >= 128 &&
-             m.at(x + 1, y) >= 128 && m.at(x, y - 1) >= 128 && m.at(x, y + 1) >= 128;
+      if (x < e || y < e || x >= m.width - e || y >= m.height - e) return false;
+      for (int dy = -e; dy <= e; ++dy)
+        for (int dx = -e; dx <= e; ++dx)
+          if (std::abs(dx) + std::abs(dy) <= e && m.at(x + dx, y + dy) < 128) return false;
+      return true;
     };
     size_t count = 0;
     for (int y = 0; y < m.height; ++y)

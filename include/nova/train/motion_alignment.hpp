@@ -27,6 +27,10 @@ struct AlignmentOptions {
   std::vector<double> blur_px{2.0, 1.0, 0.5};
   int iterations = 10;          // Gauss-Newton steps per level
   int max_points = 1200;        // of the first view's pixels
+  // Pixels of each mask's rim left out (at least 1), where a blurred disparity mixes the
+  // object's depth with the background's. A 2-pixel rim follows the family's turns better
+  // and trains worse objects (docs/accuracy.md): 1.
+  double edge_px = 1.0;
   double depth_weight = 1.0;    // a relative depth error of 10 % weighs as a colour error of 0.1
   double mask_weight = 0.5;     // a point outside the second mask weighs as a colour error of 0.5
   double turn_prior = 1e-3;     // damping towards no turn (per radian squared), for textureless objects
