@@ -195,8 +195,8 @@ int motion(const Args& args) {
   AlignmentOptions options;
   options.window = static_cast<int>(o.integer("window"));
   if (options.window < 1) throw Error("option 'window' must be at least 1, not " + o.str("window"));
-  options.edge_px = o.number("edge");
-  if (!(options.edge_px >= 0)) throw Error("option 'edge' must be at least 0, not " + o.str("edge"));
+  options.edge_px = static_cast<int>(o.integer("edge"));
+  if (options.edge_px < 1) throw Error("option 'edge' must be at least 1, not " + o.str("edge"));
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");

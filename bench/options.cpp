@@ -1,7 +1,6 @@
 // nova-bench's option parsing (bench/options.hpp).
 #include "options.hpp"
 
-#include <cmath>
 #include <sstream>
 
 #include "nova/runtime/error.hpp"
@@ -56,22 +55,6 @@ long Options::integer(const std::string& k) const {
   } catch (const std::exception&) {
     throw Error("--" + k + " must be an integer, got '" + values_.at(k) + "'");
   }
-}
-
-bool parse_number(const std::string& text, double& out) {
-  size_t used = 0;
-  try {
-    out = std::stod(text, &used);
-  } catch (const std::exception&) {
-    return false;
-  }
-  return used > 0 && used == text.size() && std::isfinite(out);
-}
-
-double Options::number(const std::string& k) const {
-  double x = 0;
-  if (!parse_number(values_.at(k), x)) throw Error("--" + k + " must be a number, got '" + values_.at(k) + "'");
-  return x;
 }
 
 std::vector<std::string> Options::strings(const std::string& k) const {

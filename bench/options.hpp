@@ -13,9 +13,6 @@ namespace nova::bench {
 std::vector<std::string> take_repeated(std::vector<std::string>& args, const std::string& option,
                                        const std::string& value_hint);
 
-// `text` as a finite number, all of it (no trailing characters); false if it is not one.
-bool parse_number(const std::string& text, double& out);
-
 class Options {
  public:
   // `defaults` names every option; a default of "off" or "on" makes it a flag. Error naming
@@ -27,7 +24,6 @@ class Options {
   std::string str(const std::string& k) const { return values_.at(k); }
   bool flag(const std::string& k) const { return values_.at(k) == "on"; }
   long integer(const std::string& k) const;
-  double number(const std::string& k) const;  // a finite number, all of the value
   // A comma-separated list, empty items dropped.
   std::vector<std::string> strings(const std::string& k) const;
   std::vector<long> integers(const std::string& k) const;

@@ -90,7 +90,7 @@ BOOST_AUTO_TEST_CASE(the_masks_rim_is_left_out) {
   const Camera c = w.camera(0);
   const SynthRender r = w.render(c, -1.0);
   int last = 1 << 30;
-  for (double edge : {1.0, 2.0, 4.0}) {
+  for (int edge : {1, 2, 4}) {
     AlignmentOptions o;
     o.edge_px = edge;
     o.max_points = 1 << 20;    // every interior pixel, none skipped

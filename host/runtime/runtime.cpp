@@ -237,6 +237,7 @@ std::vector<float> Runtime::download_floats(cl_mem src, size_t count) {
 }
 
 void Runtime::note_launch(cl_kernel kernel, size_t dims, const size_t* size, const size_t* local) {
+  ++commands_.kernels;
   if (!record_launches_) return;
   LaunchRecord r;
   if (auto it = kernel_names_.find(kernel); it != kernel_names_.end())
@@ -281,7 +282,6 @@ void Launch::run(size_t n) {
   const size_t wg = rt_.work_group_size(kernel_);
   const size_t global = (n + wg - 1) / wg * wg;
   rt_.note_launch(kernel_, 1, &n, &wg);
-  rt_.count_kernel();
   cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 1, nullptr, &global, &wg, 0, nullptr,
                                   nullptr),
            "clEnqueueNDRangeKernel");
@@ -303,7 +303,6 @@ void Launch::run2(size_t n0, size_t n1, size_t max_group, size_t max0) {
   const size_t global[2] = {(n0 + l0 - 1) / l0 * l0, (n1 + l1 - 1) / l1 * l1};
   const size_t size[2] = {n0, n1};
   rt_.note_launch(kernel_, 2, size, local);
-  rt_.count_kernel();
   cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 2, nullptr, global, local, 0, nullptr,
                                   nullptr),
            "clEnqueueNDRangeKernel");

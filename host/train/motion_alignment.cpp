@@ -208,7 +208,7 @@ class Aligner {
     // A pixel within e pixels (city-block) of the mask's edge is left out: there the disparity
     // mixes the object's depth with what lies behind it. A view left with too few pixels gives
     // no turn (the anchors' shift alone).
-    const int e = std::max(1, static_cast<int>(std::lround(o_.edge_px)));
+    const int e = std::max(1, o_.edge_px);
     auto inside = [&](int x, int y) {
       if (x < e || y < e || x >= m.width - e || y >= m.height - e) return false;
       for (int dy = -e; dy <= e; ++dy)

@@ -165,6 +165,7 @@ class Runtime {
   // this runtime's own kernels is kept; CLBlast's launches are not seen.
   void record_launches(bool on) { record_launches_ = on; }
   const std::set<LaunchRecord>& launches() const { return launches_; }
+  // Every launch of this runtime's own kernels: counted, and recorded when record_launches is on.
   void note_launch(cl_kernel kernel, size_t dims, const size_t* size, const size_t* local);
 
   // Every command enqueued since the last reset (always counted: an increment each).
@@ -172,7 +173,6 @@ class Runtime {
   void reset_commands() { commands_ = {}; }
   void count_library_call() { ++commands_.library; }
   void count_host_call() { ++commands_.host; }
-  void count_kernel() { ++commands_.kernels; }
 
   Buffer alloc(size_t bytes);
   // A view of [offset, offset + bytes) of `parent`; offset must honour base_addr_align_bytes.

@@ -30,7 +30,7 @@ struct AlignmentOptions {
   // Pixels of each mask's rim left out (at least 1), where a blurred disparity mixes the
   // object's depth with the background's. A 2-pixel rim follows the family's turns better
   // and trains worse objects (docs/accuracy.md): 1.
-  double edge_px = 1.0;
+  int edge_px = 1;
   double depth_weight = 1.0;    // a relative depth error of 10 % weighs as a colour error of 0.1
   double mask_weight = 0.5;     // a point outside the second mask weighs as a colour error of 0.5
   double turn_prior = 1e-3;     // damping towards no turn (per radian squared), for textureless objects
