@@ -74,8 +74,10 @@ cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double st
 cv::Mat clean_region(const cv::Mat& region, int min_pixels, const cv::Mat& inv_depth = cv::Mat());
 
 // Splits the moving regions of all frames into objects tracked through time: [object][frame],
-// CV_8U 255 inside; empty when nothing persists.
+// CV_8U 255 inside; empty when nothing persists. inv_depth: per frame (CV_32F), to tell
+// objects apart where their regions touch.
 std::vector<std::vector<cv::Mat>> track_objects(const std::vector<cv::Mat>& regions,
+                                                const std::vector<cv::Mat>& inv_depth,
                                                 const MotionMaskOptions& options,
                                                 std::vector<std::string>& notes);
 

@@ -98,7 +98,9 @@ MotionMasks make_motion_masks(const Scene& scene, const MotionMaskOptions& optio
     std::snprintf(line, sizeof line, "regions: %d frames (%.1f s)", n, seconds());
     report(options, line);
   }
-  std::vector<std::vector<cv::Mat>> objects = masks::track_objects(regions, options, out.notes);
+  std::vector<cv::Mat> inv_depth;
+  for (const auto& f : frames) inv_depth.push_back(f.inv_depth);
+  std::vector<std::vector<cv::Mat>> objects = masks::track_objects(regions, inv_depth, options, out.notes);
 
   const int w = scene.frames[0].rgb.width, h = scene.frames[0].rgb.height;
   out.nothing_moves = objects.empty();
