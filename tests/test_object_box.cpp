@@ -90,12 +90,16 @@ BOOST_AUTO_TEST_CASE(a_zero_box_is_the_scene_cube) {
 
 BOOST_AUTO_TEST_CASE(option_reads_and_needs_the_rigid_model) {
   TrainConfig c = preset_config("quick");
-  set_config_value(c, "object-box", "true");
-  BOOST_TEST(c.field.object_box);
+  BOOST_TEST(c.field.object_box);  // quick's rigid objects have boxes of their own
   validate(c);
   const HashGridConfig h = object_hash_config(c.field);
   BOOST_TEST(h.bound == 1.0f);
+  // The (x, y, z, t) field on quick: object-motion none takes the box with the rigid model.
   set_config_value(c, "object-motion", "none");
+  BOOST_TEST(!c.field.object_box);
+  validate(c);
+  // Asked for together with it: an error that names both.
+  set_config_value(c, "object-box", "true");
   try {
     validate(c);
     BOOST_FAIL("object-box without the rigid model was accepted");
@@ -104,6 +108,18 @@ BOOST_AUTO_TEST_CASE(option_reads_and_needs_the_rigid_model) {
     BOOST_TEST(what.find("object-box") != std::string::npos, what);
     BOOST_TEST(what.find("object-motion") != std::string::npos, what);
   }
+}
+
+// The command line and a run's config.ini apply options in the table's order: object-box after
+// object-motion, so `--object-motion none --object-box true` is the error above, not a box
+// quietly dropped.
+BOOST_AUTO_TEST_CASE(object_box_is_applied_after_object_motion) {
+  const auto& options = config_options();
+  const auto at = [&](const std::string& key) {
+    return std::find_if(options.begin(), options.end(), [&](const ConfigOption& o) { return o.key == key; });
+  };
+  BOOST_TEST_REQUIRE((at("object-box") != options.end()));
+  BOOST_TEST((at("object-motion") < at("object-box")));
 }
 
 BOOST_AUTO_TEST_SUITE_END()

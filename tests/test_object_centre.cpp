@@ -129,7 +129,7 @@ KnownField known_field(const Scene& scene, const RayGeometry& geo, const std::ve
   c = preset_config("quick");
   // The paper's field of (x, y, z, t), whose trunk reads the point and the time directly
   // (pos-freqs 0): the weights below give it a known density.
-  c.field.motion = ObjectMotion::None;
+  set_config_value(c, "object-motion", "none");  // (and with it no object box)
   c.field.encoding = Encoding::Frequency;
   c.field.pos_freqs = 0;
   c.field.depth = 2;

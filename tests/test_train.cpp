@@ -148,7 +148,7 @@ void check_learns_the_tiny_scene(const TrainConfig& c) {
 BOOST_AUTO_TEST_CASE(learns_the_tiny_scene) {
   // The paper's networks: frequency encoding, objects as fields of (x, y, z, t).
   TrainConfig c = tiny_config(Encoding::Frequency);
-  c.field.motion = ObjectMotion::None;
+  set_config_value(c, "object-motion", "none");  // (and with it no object box)
   check_learns_the_tiny_scene(c);
 }
 
@@ -394,7 +394,7 @@ const GridRun& grid_run() {
     // default_pivot_falls_back_to_the_origin needs (a grid that marks no object cell occupied,
     // and a density the full probe still finds); a rigid object's canonical field of this
     // model has no positive density at the probe's cells.
-    c.field.motion = ObjectMotion::None;
+    set_config_value(c, "object-motion", "none");
     Trainer t(runtime(), g.scene, c, (dir / "run").string());
     t.run([&](const TrainProgress& p) { g.kept = p.kept; });
     g.checkpoint = t.checkpoint();

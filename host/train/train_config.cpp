@@ -159,8 +159,6 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("canonical-colour-time-freqs", "object-motion rigid: a canonical field's colour also reads time, encoded with this many frequencies, as the shade of a turning object changes under a fixed light (-1: colour of the position alone; density never reads time)", -1, 24,
                          [](TrainConfig& c) -> int& { return c.field.canonical_colour_time_freqs; }));
   o.back().before = "-1";
-  o.push_back(bool_option("object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object",
-                          [](TrainConfig& c) -> bool& { return c.field.object_box; }));
   o.push_back(int_option("deform-width", "object-motion rigid: width of a deformation network that moves each canonical sample as a function of its position and time, for objects that change shape (0: none, the shape stays rigid)", 0, 1024,
                          [](TrainConfig& c) -> int& { return c.field.deform_width; }));
   o.back().before = "0";
@@ -236,11 +234,18 @@ std::vector<ConfigOption> make_options() {
                [](const TrainConfig& c) { return std::string(object_motion_name(c.field.motion)); },
                [](TrainConfig& c, const std::string& v) {
                  const std::string t = trim(v);
-                 if (t == "none") c.field.motion = ObjectMotion::None;
-                 else if (t == "rigid") c.field.motion = ObjectMotion::Rigid;
+                 if (t == "none") {
+                   c.field.motion = ObjectMotion::None;
+                   c.field.object_box = false;  // a box of its own is the rigid model's canonical space
+                 } else if (t == "rigid") c.field.motion = ObjectMotion::Rigid;
                  else bad_value("object-motion", v, "is not one of none, rigid");
                }});
   o.back().before = "none";
+  // After object-motion, which turns it off with the rigid model: `--object-motion none` on a
+  // preset with boxes trains the (x, y, z, t) field, while asking for a box as well is an error.
+  o.push_back(bool_option("object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object (object-motion none turns it off)",
+                          [](TrainConfig& c) -> bool& { return c.field.object_box; }));
+  o.back().before = "false";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
   o.push_back(int_option("canonical-coarse-to-fine", "object-motion rigid, hash grid (unused with the frequency encoding): joint steps over which the canonical grid's levels open from coarse to fine, so the motion aligns coarse shapes first (0: every level from the start)", 0, kBig,
