@@ -18,10 +18,12 @@
 #include "nova/train/disparity_fit.hpp"
 #include "nova/data/scene_io.hpp"
 #include "nova/data/synth.hpp"
+#include "nova/masks/motion_masks.hpp"
 #include "nova/model/checkpoint.hpp"
 #include "nova/runtime/error.hpp"
 #include "nova/sampling/rigid_motion.hpp"
 #include "nova/train/motion_alignment.hpp"
+#include "nova/train/motion_init.hpp"
 
 namespace nova::bench {
 namespace {
@@ -80,11 +82,33 @@ Mat3 trained_turn(const std::vector<float>& rows, int frames, int k, int a, int 
   return multiply(transpose(euler_xyz_to_matrix(angles(b))), euler_xyz_to_matrix(angles(a)));
 }
 
+// Which of the scene's objects follows each true object: the one sharing the most pixels with
+// it over the video (the scene's own numbering where its masks are the given ones).
+std::vector<int> match_objects(const Scene& scene, const SynthWorld& world) {
+  const int F = int(scene.frames.size()), K = int(scene.frames[0].masks.size()) - 1;
+  std::vector<std::vector<long>> shared(size_t(world.objects()) + 1, std::vector<long>(size_t(K) + 1, 0));
+  for (int i = 0; i < F; ++i) {
+    const auto truth = world.render(world.camera(i), frame_time(i, F)).masks;
+    for (int k = 1; k <= world.objects(); ++k)
+      for (int m = 1; m <= K; ++m) {
+        const Image8& a = truth[size_t(k)];
+        const Image8& b = scene.frames[size_t(i)].masks[size_t(m)];
+        for (size_t p = 0; p < a.data.size(); ++p) shared[size_t(k)][size_t(m)] += a.data[p] && b.data[p] >= 128;
+      }
+  }
+  std::vector<int> out(size_t(world.objects()) + 1, 0);
+  for (int k = 1; k <= world.objects(); ++k)
+    for (int m = 1; m <= K; ++m)
+      if (!out[size_t(k)] || shared[size_t(k)][size_t(m)] > shared[size_t(k)][size_t(out[size_t(k)])]) out[size_t(k)] = m;
+  return out;
+}
+
 std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact_depth, const std::string& run,
                                    const AlignmentOptions& options) {
   const Scene scene = load_scene(dir);
   const SynthWorld world("family", uint32_t(seed));
   const int F = int(scene.frames.size());
+  const std::vector<int> scene_object = match_objects(scene, world);
   // The loaded world is the generator's rotated by Rc and scaled (llff_poses.hpp's transform):
   // both read off the cameras, so the truth's turns can be written in the loaded world.
   const Mat3 Rc = multiply(rotation_of(scene.frames[0].camera.c2w), transpose(rotation_of(world.camera(0).c2w)));
@@ -138,14 +162,28 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
     s.seed = seed;
     s.object = k;
     std::vector<int> seen;
+    const size_t m = size_t(scene_object[size_t(k)]);  // its masks in the scene
     for (int i = 0; i < F; ++i)
-      if (mask_pixels(scene.frames[size_t(i)].masks.at(size_t(k))) >= 8) seen.push_back(i);
+      if (mask_pixels(scene.frames[size_t(i)].masks.at(m)) >= 8) seen.push_back(i);
     std::vector<ObjectView> views;
     std::vector<Vec3> anchors;
     for (int i : seen) {
       const Frame& f = scene.frames[size_t(i)];
-      views.push_back({&f.camera, &f.rgb, &f.masks.at(size_t(k)), &depth[size_t(i)]});
-      anchors.push_back(centroid_at_median_depth(f, depth[size_t(i)], f.masks.at(size_t(k))));
+      views.push_back({&f.camera, &f.rgb, &f.masks.at(m), &depth[size_t(i)]});
+      anchors.push_back(centroid_at_median_depth(f, depth[size_t(i)], f.masks.at(m)));
+    }
+    {  // the frames initial_motion leaves out: anchors off the object's path
+      std::vector<double> radii;
+      for (size_t j = 0; j < seen.size(); ++j)
+        radii.push_back(mask_radius(scene.frames[size_t(seen[j])].masks.at(m), scene.frames[size_t(seen[j])].camera, anchors[j]));
+      std::sort(radii.begin(), radii.end());
+      const double floor = radii.empty() ? 0.0 : 2.0 * radii[radii.size() / 2];
+      const std::vector<size_t> dropped = outlier_anchors(anchors, seen, floor);
+      for (auto j = dropped.rbegin(); j != dropped.rend(); ++j) {
+        seen.erase(seen.begin() + long(*j));
+        views.erase(views.begin() + long(*j));
+        anchors.erase(anchors.begin() + long(*j));
+      }
     }
     const std::vector<Mat34> poses = track_object(views, anchors, options);
     for (size_t j = 1; j < seen.size(); ++j) {
@@ -183,12 +221,14 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"made-masks", "off"}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
                  "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
                  "trajectories of DIR/family-S (nova-bench accuracy's OUT/runs); --window N: earlier frames each frame "
-                 "is aligned to at once; --edge PX: pixels of each mask's rim left out\n";
+                 "is aligned to at once; --edge PX: pixels of each mask's rim left out; --made-masks: track the objects "
+                 "in the masks nova masks makes instead of the given ones (each true object by the made one that "
+                 "shares the most pixels with it)\n";
     return 0;
   }
   const std::string runs = o.str("runs");
@@ -207,6 +247,13 @@ int motion(const Args& args) {
   for (long seed : o.integers("seeds")) {
     const auto dir = scratch / ("family" + std::to_string(seed));
     write_synthetic_scene(dir.string(), "family", uint32_t(seed));
+    if (o.flag("made-masks")) {
+      LoadOptions load;
+      load.static_only = true;
+      load.load_gt = false;
+      const Scene given = load_scene(dir.string(), load);
+      write_motion_masks(given, make_motion_masks(given), (dir / "motion_masks").string(), true);
+    }
     const auto t0 = std::chrono::steady_clock::now();
     const std::string run = runs.empty() ? "" : runs + "/family-" + std::to_string(seed);
     const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"), run, options);

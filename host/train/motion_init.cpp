@@ -124,6 +124,57 @@ std::array<float, 6> object_box_row(const Vec3& centre, double half, const RayGe
   return row;
 }
 
+double mask_radius(const Image8& mask, const Camera& camera, const Vec3& anchor) {
+  double cx = 0, cy = 0, n = 0;
+  for (int y = 0; y < mask.height; ++y)
+    for (int x = 0; x < mask.width; ++x)
+      if (mask.at(x, y) >= 128) cx += x, cy += y, n += 1;
+  if (n == 0) return 0;
+  cx /= n;
+  cy /= n;
+  std::vector<double> spread;
+  for (int y = 0; y < mask.height; ++y)
+    for (int x = 0; x < mask.width; ++x)
+      if (mask.at(x, y) >= 128) spread.push_back(std::hypot(x - cx, y - cy));
+  std::nth_element(spread.begin(), spread.begin() + static_cast<long>(spread.size() * 95 / 100), spread.end());
+  const double pixels = spread[spread.size() * 95 / 100] + 0.5;
+  double distance = 0;
+  for (int d = 0; d < 3; ++d) distance += (anchor[d] - camera.position(d)) * (anchor[d] - camera.position(d));
+  return pixels * std::sqrt(distance) / camera.fx;
+}
+
+std::vector<size_t> outlier_anchors(const std::vector<Vec3>& anchors, const std::vector<int>& frames, double floor) {
+  if (frames.size() != anchors.size()) throw Error("outlier_anchors: one frame per anchor", kExitInternal);
+  std::vector<size_t> kept(anchors.size()), dropped;
+  for (size_t j = 0; j < kept.size(); ++j) kept[j] = j;
+  const auto distance = [&](const Vec3& a, const Vec3& b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+  };
+  // Each pass drops the anchor farthest from where its kept neighbours put it, while that is
+  // more than kOutlierSteps typical steps and more than `floor`.
+  while (kept.size() >= 4) {
+    std::vector<double> steps;
+    for (size_t j = 1; j < kept.size(); ++j) steps.push_back(distance(anchors[kept[j]], anchors[kept[j - 1]]));
+    const double typical = median(steps);
+    size_t worst = 0;
+    double worst_residual = -1;
+    for (size_t j = 0; j < kept.size(); ++j) {
+      // Between its neighbours where it has two (linear), else beyond the nearest two.
+      const size_t a = j == 0 ? 1 : j - 1, b = j == 0 ? 2 : (j + 1 < kept.size() ? j + 1 : j - 2);
+      const double ia = frames[kept[a]], ib = frames[kept[b]], w = (frames[kept[j]] - ia) / (ib - ia);
+      Vec3 predicted;
+      for (int d = 0; d < 3; ++d) predicted[d] = (1 - w) * anchors[kept[a]][d] + w * anchors[kept[b]][d];
+      const double residual = distance(anchors[kept[j]], predicted);
+      if (residual > worst_residual) worst_residual = residual, worst = j;
+    }
+    if (worst_residual <= std::max(kOutlierSteps * typical, floor)) break;
+    dropped.push_back(kept[worst]);
+    kept.erase(kept.begin() + static_cast<long>(worst));
+  }
+  std::sort(dropped.begin(), dropped.end());
+  return dropped;
+}
+
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
                            int samples, Executor& trained) {
   const int K = geo.num_objects, F = motion_options(geo).frames;
@@ -162,6 +213,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
     double radius = 0;  // world units, the largest over the frames
     std::vector<std::optional<Vec3>> anchor(static_cast<size_t>(F));
     std::vector<size_t> frame_of(static_cast<size_t>(F));
+    std::vector<double> radius_of(static_cast<size_t>(F), 0.0);  // world units, per frame
     for (size_t i = 0; i < scene.frames.size(); ++i) {
       const Frame& f = scene.frames[i];
       const Image8& m = f.masks.at(static_cast<size_t>(k));
@@ -178,12 +230,6 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
       if (n == 0) continue;
       cx /= n;
       cy /= n;
-      std::vector<double> spread;
-      for (int y = 0; y < m.height; ++y)
-        for (int x = 0; x < m.width; ++x)
-          if (m.at(x, y) >= 128) spread.push_back(std::hypot(x - cx, y - cy));
-      std::nth_element(spread.begin(), spread.begin() + static_cast<long>(spread.size() * 95 / 100), spread.end());
-      const double pixels = spread[spread.size() * 95 / 100] + 0.5;
       const int index = std::clamp(static_cast<int>(std::lround((f.time + 1.0) * 0.5 * F)), 0, F - 1);
       frame_of[static_cast<size_t>(index)] = i;
       if (fitted) {
@@ -199,16 +245,30 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
                                     static_cast<double>(geo.near), static_cast<double>(geo.far));
         anchor[static_cast<size_t>(index)] = world_point(f.camera, cx, cy, t, geo.ndc);
       }
-      if (const auto& a = anchor[static_cast<size_t>(index)]) {
-        double distance = 0;
-        for (int d = 0; d < 3; ++d) distance += ((*a)[d] - f.camera.position(d)) * ((*a)[d] - f.camera.position(d));
-        radius = std::max(radius, pixels * std::sqrt(distance) / f.camera.fx);
-      }
+      if (const auto& a = anchor[static_cast<size_t>(index)]) radius_of[static_cast<size_t>(index)] = mask_radius(m, f.camera, *a);
     }
     std::vector<int> known;
     for (int i = 0; i < F; ++i)
       if (anchor[static_cast<size_t>(i)]) known.push_back(i);
     if (known.empty()) continue;  // never seen: it stays at the origin
+    // A mask that took in a piece of the background (a made mask where the object touches
+    // something static) puts its median depth, and with it the anchor, far off the object's
+    // path for that frame: such frames take their neighbours' rows, and neither the
+    // alignment nor the box reads them. A jump within the object's own size is not one.
+    {
+      std::vector<Vec3> path;
+      std::vector<double> radii;
+      for (int i : known) {
+        path.push_back(*anchor[static_cast<size_t>(i)]);
+        radii.push_back(radius_of[static_cast<size_t>(i)]);
+      }
+      const std::vector<size_t> dropped = outlier_anchors(path, known, 2.0 * median(radii));
+      for (auto j = dropped.rbegin(); j != dropped.rend(); ++j) {
+        anchor[static_cast<size_t>(known[*j])].reset();
+        known.erase(known.begin() + static_cast<long>(*j));
+      }
+    }
+    for (int i : known) radius = std::max(radius, radius_of[static_cast<size_t>(i)]);
 
     // The object's pose (object -> world) at every frame that shows it: the first at its
     // anchor, unturned; each next one the previous moved by the alignment of the two frames

@@ -34,6 +34,20 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
 // than the scene's box (RayGeometry::box; a metric scene's extent).
 std::array<float, 6> object_box_row(const Vec3& centre, double half, const RayGeometry& geo);
 
+// An object's radius in world units as one frame's mask shows it: the 95th percentile of its
+// pixels' distances from their centroid, at the anchor's distance from the camera. 0 for an
+// empty mask.
+double mask_radius(const Image8& mask, const Camera& camera, const Vec3& anchor);
+
+// The anchors (an object's mask centroid at its median depth) of the frames `frames`
+// (ascending) that lie off the object's path: each pass drops the one farthest from where its neighbours
+// put it (between the two around it, or beyond the nearest two at an end) while that distance
+// is more than kOutlierSteps times the median step between consecutive anchors and more than
+// `floor` (world units: initial_motion takes two of the object's radii, so that a jump within
+// its own size stays). Returns their indices, ascending; fewer than four anchors keep all.
+inline constexpr double kOutlierSteps = 4.0;
+std::vector<size_t> outlier_anchors(const std::vector<Vec3>& anchors, const std::vector<int>& frames, double floor);
+
 // Half-sizes of an object's box in units of its radius as the masks show it (the 95th
 // percentile of its pixels' distances from their centroid, at the anchor's distance, the
 // largest over the frames). The anchor sits on the object's visible surface, so its centre

@@ -1,0 +1,83 @@
+// The rigid start's anchors (include/nova/train/motion_init.hpp, outlier_anchors): a frame
+// whose anchor jumps off the object's path is dropped, a path with small wobbles or one that
+// turns keeps every frame, and a jump within the floor (the object's own size) stays.
+#include <boost/test/unit_test.hpp>
+#include <vector>
+
+#include "nova/train/motion_init.hpp"
+
+namespace nova::test {
+namespace {
+
+// An object moving 0.1 a frame along x and slowly away, with a wobble of +-0.01 (a mask's
+// centroid moves a little with its outline).
+std::vector<Vec3> straight_path(int frames) {
+  std::vector<Vec3> p;
+  for (int i = 0; i < frames; ++i) p.push_back({0.1 * i, 0.01 * (i % 2 ? 1 : -1), -2.0 - 0.02 * i});
+  return p;
+}
+
+std::vector<int> frame_numbers(int frames) {
+  std::vector<int> f;
+  for (int i = 0; i < frames; ++i) f.push_back(i);
+  return f;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(motion_start)
+
+BOOST_AUTO_TEST_CASE(an_anchor_off_the_path_is_dropped) {
+  std::vector<Vec3> p = straight_path(12);
+  p[4][2] -= 1.9;  // a median depth on the background behind the object
+  const std::vector<size_t> dropped = outlier_anchors(p, frame_numbers(12), 0.3);
+  BOOST_TEST_REQUIRE(dropped.size() == 1u);
+  BOOST_TEST(dropped[0] == 4u);
+}
+
+BOOST_AUTO_TEST_CASE(an_outlier_at_either_end_is_dropped) {
+  for (const size_t at : {size_t(0), size_t(11)}) {
+    std::vector<Vec3> p = straight_path(12);
+    p[at][2] -= 1.5;
+    const std::vector<size_t> dropped = outlier_anchors(p, frame_numbers(12), 0.3);
+    BOOST_TEST_REQUIRE(dropped.size() == 1u);
+    BOOST_TEST(dropped[0] == at);
+  }
+}
+
+BOOST_AUTO_TEST_CASE(two_outliers_are_dropped_and_their_neighbours_kept) {
+  std::vector<Vec3> p = straight_path(14);
+  p[3][0] += 2.0;
+  p[9][2] -= 2.0;
+  const std::vector<size_t> dropped = outlier_anchors(p, frame_numbers(14), 0.3);
+  BOOST_TEST(dropped == (std::vector<size_t>{3, 9}), boost::test_tools::per_element());
+}
+
+BOOST_AUTO_TEST_CASE(a_clean_or_curving_path_keeps_every_anchor) {
+  BOOST_TEST(outlier_anchors(straight_path(12), frame_numbers(12), 0.3).empty());
+  // A bend of the path (a Bezier's turn) is no outlier: 0.1 a frame, then 0.1 a frame upwards.
+  std::vector<Vec3> bend;
+  for (int i = 0; i < 12; ++i) bend.push_back({0.1 * std::min(i, 6), 0.1 * std::max(0, i - 6), -2.0});
+  BOOST_TEST(outlier_anchors(bend, frame_numbers(12), 0.3).empty());
+}
+
+BOOST_AUTO_TEST_CASE(a_jump_within_the_floor_stays_and_gaps_count_as_frames) {
+  std::vector<Vec3> p = straight_path(12);
+  p[5][2] -= 0.25;  // under the floor of 0.3: the object's own size
+  BOOST_TEST(outlier_anchors(p, frame_numbers(12), 0.3).empty());
+  // Frames 0-5 and 9-14 (the object left the view between): the path's step across the gap is
+  // three frames' worth, not an outlier.
+  std::vector<Vec3> gap;
+  std::vector<int> frames;
+  for (int i : {0, 1, 2, 3, 4, 5, 9, 10, 11, 12, 13, 14}) {
+    gap.push_back({0.1 * i, 0.0, -2.0});
+    frames.push_back(i);
+  }
+  BOOST_TEST(outlier_anchors(gap, frames, 0.05).empty());
+  // Fewer than four anchors: nothing to judge by.
+  BOOST_TEST(outlier_anchors({{0, 0, -2}, {5, 0, -2}, {0.2, 0, -2}}, {0, 1, 2}, 0.0).empty());
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+}  // namespace nova::test
