@@ -68,6 +68,9 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
 // Each connected part of `region` grown over pixels whose inverse depth changes by less than
 // `step` (relative) from pixel to pixel, unless it would grow past `max_growth` times its area.
 cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step, double max_growth);
+// The median of `inv_depth` (CV_32F) over the non-zero pixels of `where` (CV_8U); 0 where
+// there are none.
+float median_inverse_depth(const cv::Mat& where, const cv::Mat& inv_depth);
 // Drops connected regions under `min_pixels` and fills enclosed holes (CV_8U, 255 inside); with
 // `inv_depth`, not the holes whose depth lies behind the region around them (background seen
 // through the object).

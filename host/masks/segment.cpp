@@ -30,6 +30,16 @@ double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptio
   return t;
 }
 
+float median_inverse_depth(const cv::Mat& where, const cv::Mat& inv_depth) {
+  std::vector<float> v;
+  for (int y = 0; y < where.rows; ++y)
+    for (int x = 0; x < where.cols; ++x)
+      if (where.at<uint8_t>(y, x)) v.push_back(inv_depth.at<float>(y, x));
+  if (v.empty()) return 0.0f;
+  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
 cv::Mat clean_region(const cv::Mat& region, int min_pixels, const cv::Mat& inv_depth) {
   cv::Mat labels, stats, centroids;
   const int n = cv::connectedComponentsWithStats(region, labels, stats, centroids, 8, CV_32S);
@@ -53,21 +63,12 @@ cv::Mat clean_region(const cv::Mat& region, int min_pixels, const cv::Mat& inv_d
   cv::Mat hole_labels;
   const int holes_n = cv::connectedComponents(holes, hole_labels, 4, CV_32S);
   const cv::Mat k7 = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7));
-  auto median_of = [&](const cv::Mat& where) {
-    std::vector<float> v;
-    for (int y = 0; y < where.rows; ++y)
-      for (int x = 0; x < where.cols; ++x)
-        if (where.at<uint8_t>(y, x)) v.push_back(inv_depth.at<float>(y, x));
-    if (v.empty()) return 0.0f;
-    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
   for (int k = 1; k < holes_n; ++k) {
     const cv::Mat hole = hole_labels == k;
     cv::Mat ring;
     cv::dilate(hole, ring, k7);
     ring &= out;
-    if (median_of(hole) >= 0.95f * median_of(ring)) out.setTo(255, hole);
+    if (median_inverse_depth(hole, inv_depth) >= 0.95f * median_inverse_depth(ring, inv_depth)) out.setTo(255, hole);
   }
   return out;
 }

@@ -39,17 +39,6 @@ cv::Mat predicted_region(const Track& t, int i) {
   return out;
 }
 
-// Median inverse depth over a region's pixels.
-double median_depth(const cv::Mat& region, const cv::Mat& inv_depth) {
-  std::vector<float> v;
-  for (int y = 0; y < region.rows; ++y)
-    for (int x = 0; x < region.cols; ++x)
-      if (region.at<uchar>(y, x)) v.push_back(inv_depth.at<float>(y, x));
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
-
 // A component's pixels to the claimants, each pixel to the lowest cost: its distance (px) to
 // the claimant's predicted region plus kDepthPx pixels per unit of relative difference from
 // the claimant's inverse depth. Where the regions overlap (an object in front of another) the
@@ -109,10 +98,12 @@ std::vector<std::vector<cv::Mat>> track_objects(const std::vector<cv::Mat>& regi
     const size_t live = tracks.size();
     std::vector<std::vector<int>> overlap(live, std::vector<int>(comps.size(), 0));
     std::vector<int> best_comp(live, -1);
+    std::vector<cv::Mat> predicted(live);
     for (size_t t = 0; t < live; ++t) {
       if (tracks[t].last.empty() || tracks[t].last_frame < i - 2) continue;  // lost for more than one frame
+      predicted[t] = predicted_region(tracks[t], i);
       cv::Mat reach;
-      cv::dilate(tracks[t].last | predicted_region(tracks[t], i), reach, kernel);
+      cv::dilate(tracks[t].last | predicted[t], reach, kernel);
       for (size_t k = 1; k < comps.size(); ++k) {
         if (comps[k].empty()) continue;
         overlap[t][k] = cv::countNonZero(comps[k] & reach);
@@ -129,13 +120,13 @@ std::vector<std::vector<cv::Mat>> track_objects(const std::vector<cv::Mat>& regi
         if (best_comp[t] == int(k) && tracks[t].seen >= 2 && overlap[t][k] >= kClaim * tracks[t].last_area)
           claimants.push_back(t);
       if (claimants.size() >= 2) {
-        std::vector<cv::Mat> predicted;
+        std::vector<cv::Mat> regions;
         std::vector<double> depths;
         for (size_t t : claimants) {
-          predicted.push_back(predicted_region(tracks[t], i));
+          regions.push_back(predicted[t]);
           depths.push_back(tracks[t].depth);
         }
-        const std::vector<cv::Mat> parts = split_component(comps[k], predicted, depths, inv_depth[size_t(i)]);
+        const std::vector<cv::Mat> parts = split_component(comps[k], regions, depths, inv_depth[size_t(i)]);
         for (size_t c = 0; c < claimants.size(); ++c) {
           split[claimants[c]] = true;
           if (cv::countNonZero(parts[c])) assigned.push_back({int(claimants[c]), parts[c]});
@@ -181,7 +172,7 @@ std::vector<std::vector<cv::Mat>> track_objects(const std::vector<cv::Mat>& regi
       tr.last_frame = i;
       tr.last_centre = centre;
       tr.last_area = mo.m00;
-      tr.depth = median_depth(m, inv_depth[size_t(i)]);
+      tr.depth = median_inverse_depth(m, inv_depth[size_t(i)]);
       ++tr.seen;
       tr.area += mo.m00, tr.sx += mo.m10, tr.sy += mo.m01;
     }
