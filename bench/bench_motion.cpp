@@ -176,9 +176,7 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       std::vector<double> radii;
       for (size_t j = 0; j < seen.size(); ++j)
         radii.push_back(mask_radius(scene.frames[size_t(seen[j])].masks.at(m), scene.frames[size_t(seen[j])].camera, anchors[j]));
-      std::sort(radii.begin(), radii.end());
-      const double floor = radii.empty() ? 0.0 : 2.0 * radii[radii.size() / 2];
-      const std::vector<size_t> dropped = outlier_anchors(anchors, seen, floor);
+      const std::vector<size_t> dropped = off_path_anchors(anchors, seen, radii);
       for (auto j = dropped.rbegin(); j != dropped.rend(); ++j) {
         seen.erase(seen.begin() + long(*j));
         views.erase(views.begin() + long(*j));

@@ -1,4 +1,5 @@
-// The rigid start's anchors (include/nova/train/motion_init.hpp, outlier_anchors): a frame
+// The rigid start's anchors (include/nova/train/motion_init.hpp, outlier_anchors and
+// off_path_anchors): a frame
 // whose anchor jumps off the object's path is dropped, a path with small wobbles or one that
 // turns keeps every frame, and a jump within the floor (the object's own size) stays.
 #include <boost/test/unit_test.hpp>
@@ -76,6 +77,17 @@ BOOST_AUTO_TEST_CASE(a_jump_within_the_floor_stays_and_gaps_count_as_frames) {
   BOOST_TEST(outlier_anchors(gap, frames, 0.05).empty());
   // Fewer than four anchors: nothing to judge by.
   BOOST_TEST(outlier_anchors({{0, 0, -2}, {5, 0, -2}, {0.2, 0, -2}}, {0, 1, 2}, 0.0).empty());
+}
+
+// The start's own rule: the floor is two of the object's median radius. A jump of 0.5 is more
+// than four of this path's steps (about 0.1 each), so the floor alone decides.
+BOOST_AUTO_TEST_CASE(the_start_keeps_a_jump_within_two_radii) {
+  std::vector<Vec3> p = straight_path(12);
+  p[5][2] -= 0.5;
+  BOOST_TEST(off_path_anchors(p, frame_numbers(12), std::vector<double>(12, 0.3)).empty());
+  const std::vector<size_t> dropped = off_path_anchors(p, frame_numbers(12), std::vector<double>(12, 0.2));
+  BOOST_TEST_REQUIRE(dropped.size() == 1u);
+  BOOST_TEST(dropped[0] == 5u);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -175,6 +175,12 @@ std::vector<size_t> outlier_anchors(const std::vector<Vec3>& anchors, const std:
   return dropped;
 }
 
+std::vector<size_t> off_path_anchors(const std::vector<Vec3>& anchors, const std::vector<int>& frames,
+                                     const std::vector<double>& radii) {
+  if (radii.size() != anchors.size()) throw Error("off_path_anchors: one radius per anchor", kExitInternal);
+  return outlier_anchors(anchors, frames, kOutlierRadii * median(radii));
+}
+
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
                            int samples, Executor& trained) {
   const int K = geo.num_objects, F = motion_options(geo).frames;
@@ -262,7 +268,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
         path.push_back(*anchor[static_cast<size_t>(i)]);
         radii.push_back(radius_of[static_cast<size_t>(i)]);
       }
-      const std::vector<size_t> dropped = outlier_anchors(path, known, 2.0 * median(radii));
+      const std::vector<size_t> dropped = off_path_anchors(path, known, radii);
       for (auto j = dropped.rbegin(); j != dropped.rend(); ++j) {
         anchor[static_cast<size_t>(known[*j])].reset();
         known.erase(known.begin() + static_cast<long>(*j));

@@ -43,10 +43,16 @@ double mask_radius(const Image8& mask, const Camera& camera, const Vec3& anchor)
 // (ascending) that lie off the object's path: each pass drops the one farthest from where its neighbours
 // put it (between the two around it, or beyond the nearest two at an end) while that distance
 // is more than kOutlierSteps times the median step between consecutive anchors and more than
-// `floor` (world units: initial_motion takes two of the object's radii, so that a jump within
-// its own size stays). Returns their indices, ascending; fewer than four anchors keep all.
+// `floor` (world units). Returns their indices, ascending; fewer than four anchors keep all.
 inline constexpr double kOutlierSteps = 4.0;
 std::vector<size_t> outlier_anchors(const std::vector<Vec3>& anchors, const std::vector<int>& frames, double floor);
+
+// The frames the rigid start leaves out (initial_motion, and nova-bench motion to score the same
+// start): outlier_anchors with a floor of kOutlierRadii times the median of the frames' object
+// radii (mask_radius, one per anchor), so that a jump within the object's own size stays.
+inline constexpr double kOutlierRadii = 2.0;
+std::vector<size_t> off_path_anchors(const std::vector<Vec3>& anchors, const std::vector<int>& frames,
+                                     const std::vector<double>& radii);
 
 // Half-sizes of an object's box in units of its radius as the masks show it (the 95th
 // percentile of its pixels' distances from their centroid, at the anchor's distance, the
