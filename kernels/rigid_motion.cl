@@ -232,3 +232,90 @@ __kernel void motion_smoothness_backward(__global const float* motion, __global 
   }
   dmotion[i] = accumulate ? dmotion[i] + v : v;
 }
+
+// ---- Samples where the objects are (object_samples.hpp, sample_warp.hpp) ----
+// The warp of a training step's samples from the objects' boxes at their times: per object b
+// the depth fractions t its box [c - h, c + h] (canonical NDC, boxes[b] = (c, -log h)) spans
+// once the motion at times[b] moves it back into the scene (x = R^T (y - q) + tau), then the
+// knots (u, t) of the mixture (1 - share) even + share split evenly over the intervals.
+// One work-item (K <= kMaxWarpObjects objects: a few dozen numbers). As sample_warp on the host.
+#define kMaxWarpObjects 16
+#define kMinWarpInterval 1e-3f
+
+__kernel void object_sample_warp(__global const float* motion, __global const float* boxes,
+                                 __global const float* times, __global float* warp, uint K,
+                                 uint frames, float ax, float ay, float near, float share) {
+  if (get_global_id(0) != 0) return;
+  float lo[kMaxWarpObjects], hi[kMaxWarpObjects];
+  uint kept = 0;
+  for (uint b = 0; b < K; ++b) {
+    __global const float* P = motion + (size_t)b * frames * 6;
+    __global const float* box = boxes + (size_t)b * 6;
+    uint f0;
+    float w, m[6], R[9], dR[27], q[3];
+    motion_frame(times[b], frames, &f0, &w);
+    motion_params(P, f0, w, frames, m);
+    motion_rotation(m, R, dR);
+    motion_pivot(P, frames, q);
+    float l = 1.0f, h = 0.0f;
+    for (int i = 0; i < 8; ++i) {
+      float y[3];
+      for (int d = 0; d < 3; ++d) y[d] = box[d] + (((i >> d) & 1) ? 1.0f : -1.0f) * exp(-box[3 + d]);
+      if (y[2] >= 1.0f) {  // NDC's far end: infinite depth
+        h = 1.0f;
+        continue;
+      }
+      const float z = 2.0f * near / (y[2] - 1.0f);
+      const float c[3] = {y[0] * z / ax - q[0], y[1] * z / ay - q[1], z - q[2]};
+      const float xz = R[2] * c[0] + R[5] * c[1] + R[8] * c[2] + m[5];
+      const float t = xz < -near ? 1.0f + near / xz : 0.0f;
+      l = fmin(l, t);
+      h = fmax(h, t);
+    }
+    if (!(h > l)) continue;
+    if (h - l < kMinWarpInterval) {
+      const float mid = 0.5f * (l + h);
+      l = mid - 0.5f * kMinWarpInterval;
+      h = mid + 0.5f * kMinWarpInterval;
+    }
+    l = fmax(l, 0.0f);
+    h = fmin(h, 1.0f);
+    if (h > l) {
+      lo[kept] = l;
+      hi[kept] = h;
+      ++kept;
+    }
+  }
+  const float even = kept ? 1.0f - share : 1.0f, each = kept ? share / (float)kept : 0.0f;
+  float bounds[2 * kMaxWarpObjects + 2];
+  uint n = 0;
+  bounds[n++] = 0.0f;
+  bounds[n++] = 1.0f;
+  for (uint b = 0; b < kept; ++b) {
+    bounds[n++] = lo[b];
+    bounds[n++] = hi[b];
+  }
+  for (uint i = 1; i < n; ++i)  // insertion sort, then drop repeats
+    for (uint j = i; j > 0 && bounds[j - 1] > bounds[j]; --j) {
+      const float s = bounds[j];
+      bounds[j] = bounds[j - 1];
+      bounds[j - 1] = s;
+    }
+  uint u = 1;
+  for (uint i = 1; i < n; ++i)
+    if (bounds[i] != bounds[u - 1]) bounds[u++] = bounds[i];
+  float cdf[2 * kMaxWarpObjects + 2];
+  cdf[0] = 0.0f;
+  for (uint i = 0; i + 1 < u; ++i) {
+    const float a = bounds[i], z = bounds[i + 1], mid = 0.5f * (a + z);
+    float density = even;
+    for (uint b = 0; b < kept; ++b)
+      if (mid > lo[b] && mid < hi[b]) density += each / (hi[b] - lo[b]);
+    cdf[i + 1] = cdf[i] + density * (z - a);
+  }
+  const uint W = 2 * K + 2;
+  for (uint i = 0; i < W; ++i) {
+    warp[2 * i] = i < u ? (i + 1 == u ? 1.0f : cdf[i] / cdf[u - 1]) : 1.0f;
+    warp[2 * i + 1] = i < u ? bounds[i] : 1.0f;
+  }
+}

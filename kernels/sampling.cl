@@ -46,32 +46,51 @@ __kernel void rays_generate(__global const float* pixels, __global const float* 
   }
 }
 
+// A warp of the samples' depth (sample_warp.hpp): W knots (u, t) of a piecewise-linear,
+// increasing map of [0, 1] onto itself, the inverse of the samples' cumulative density, so that
+// evenly spread u put more samples where the map is flat. W = 0: no warp.
+inline float warp_depth(__global const float* warp, uint W, float u) {
+  for (uint j = 0; j + 1 < W; ++j) {
+    const float u0 = warp[2 * j], u1 = warp[2 * j + 2];
+    if (u <= u1 || j + 2 == W) {
+      const float t0 = warp[2 * j + 1], t1 = warp[2 * j + 3];
+      return u1 > u0 ? t0 + (t1 - t0) * clamp((u - u0) / (u1 - u0), 0.0f, 1.0f) : t1;
+    }
+  }
+  return u;
+}
+
 // Depth of sample i of ray r: the reference's stratified scheme. Without jitter the samples
 // are linspace(near, far, S); with it, sample i is uniform (u = jitter[r, i]) between the
-// midpoints to its neighbours (the first and last keep their outer bound).
+// midpoints to its neighbours (the first and last keep their outer bound). With a warp the
+// same fraction of [near, far] goes through warp_depth.
 inline float sample_depth(__global const float* jitter, int use_jitter, uint r, uint i, uint S,
-                          float near, float far) {
+                          float near, float far, __global const float* warp, uint W) {
   const float step = S > 1 ? (far - near) / (float)(S - 1) : 0.0f;
-  const float t = near + step * (float)i;
-  if (!use_jitter) return t;
-  const float lower = i > 0 ? t - 0.5f * step : t;
-  const float upper = i + 1 < S ? t + 0.5f * step : t;
-  return lower + (upper - lower) * jitter[(size_t)r * S + i];
+  float t = near + step * (float)i;
+  if (use_jitter) {
+    const float lower = i > 0 ? t - 0.5f * step : t;
+    const float upper = i + 1 < S ? t + 0.5f * step : t;
+    t = lower + (upper - lower) * jitter[(size_t)r * S + i];
+  }
+  if (W == 0) return t;
+  return near + (far - near) * warp_depth(warp, W, (t - near) / (far - near));
 }
 
 // z [R, S] and the spacing delta [N, R, S] = (z_{i+1} - z_i) |d_n|, 1e10 |d_n| for the last
 // sample (as the reference's raw2outputs). One work-item per (sample, NeRF).
 __kernel void sample_spacing(__global const float* dirs, __global const float* jitter,
                              __global float* z, __global float* delta, uint R, uint S, uint N,
-                             float near, float far, int use_jitter) {
+                             float near, float far, int use_jitter, __global const float* warp,
+                             uint W) {
   const uint e = get_global_id(0), n = get_global_id(1);
   if (e >= R * S || n >= N) return;
   const uint r = e / S, i = e % S;
-  const float zi = sample_depth(jitter, use_jitter, r, i, S, near, far);
+  const float zi = sample_depth(jitter, use_jitter, r, i, S, near, far, warp, W);
   if (n == 0) z[e] = zi;
   __global const float* d = dirs + ((size_t)n * R + r) * 3;
   const float norm = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-  const float gap = i + 1 < S ? sample_depth(jitter, use_jitter, r, i + 1, S, near, far) - zi : 1e10f;
+  const float gap = i + 1 < S ? sample_depth(jitter, use_jitter, r, i + 1, S, near, far, warp, W) - zi : 1e10f;
   delta[(size_t)n * R * S + e] = gap * norm;
 }
 
@@ -82,11 +101,11 @@ __kernel void sample_points(__global const float* origins, __global const float*
                             __global const float* viewdirs, __global const float* jitter,
                             __global float* positions, __global float* sample_viewdirs, uint R,
                             uint S, uint first, uint count, float near, float far,
-                            int use_jitter) {
+                            int use_jitter, __global const float* warp, uint W) {
   const uint e = get_global_id(0), g = get_global_id(1);
   if (e >= R * S || g >= count) return;
   const uint r = e / S, i = e % S, n = first + g;
-  const float zi = sample_depth(jitter, use_jitter, r, i, S, near, far);
+  const float zi = sample_depth(jitter, use_jitter, r, i, S, near, far, warp, W);
   const size_t ray = ((size_t)n * R + r) * 3, out = ((size_t)g * R * S + e) * 3;
   for (int k = 0; k < 3; ++k) {
     positions[out + k] = origins[ray + k] + zi * dirs[ray + k];

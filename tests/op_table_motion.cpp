@@ -1,10 +1,13 @@
-// The op table's motion ops: rigid_motion and motion_smoothness (motion.hpp), and the hash
+// The op table's motion ops: rigid_motion and motion_smoothness (motion.hpp), the warp that
+// crowds a step's samples into the moved objects' boxes (sample_warp.hpp), and the hash
 // encoding's gradient to its positions, which carries a moved object's loss to its motion.
 #include <cmath>
 
 #include "hashgrid_reference.hpp"
 #include "nova/ops/encoding/hash_encoding.hpp"
+#include "nova/model/object_samples.hpp"
 #include "nova/sampling/rigid_motion.hpp"
+#include "nova/sampling/sample_warp.hpp"
 #include "op_table.hpp"
 
 namespace nova::test {
@@ -239,9 +242,82 @@ OpEntry hash_positions_entry() {
   return e;
 }
 
+
+// object_sample_warp: dims objects K, frames F; variant 1 stretches one box past NDC's far end
+// (a corner at infinite depth: its interval reaches t = 1). Motions as motion_case_values
+// (about world z = -3); boxes about the pivot's NDC image, 0.04-0.2 NDC units each way.
+MotionOptions warp_case_options(const OpShape& s) {
+  MotionOptions o;
+  o.frames = static_cast<int>(s.dims[1]);
+  o.ndc = true;
+  o.ax = -1.7f;
+  o.ay = -1.3f;
+  return o;
+}
+
+constexpr double kWarpShare = 0.4;
+
+OpEntry object_sample_warp_entry() {
+  OpEntry e;
+  e.name = "object_sample_warp";
+  e.shapes = {{{1, 5}, 0, "1 object x 5 frames"}, {{3, 7}, 0, "3 objects x 7 frames"},
+              {{2, 4}, 1, "2 objects x 4 frames, one box to infinity"}};
+  e.build = [](Graph& g, const OpShape& s) {
+    const size_t K = s.dims[0], F = s.dims[1];
+    Tensor m = g.input("motion", K > 1 ? Shape{K, F, 6} : Shape{F, 6});
+    Tensor b = g.input("boxes", K > 1 ? Shape{K, 6} : Shape{6});
+    Tensor t = g.input("times", Shape{K, 1});
+    return OpGraph{{m, b, t}, {object_sample_warp(m, b, t, warp_case_options(s), kWarpShare)}, {}};
+  };
+  e.values = [](const OpShape& s) {
+    const size_t K = s.dims[0], F = s.dims[1];
+    std::vector<float> m(K * F * 6);
+    const std::vector<float> r = random_floats(m.size(), -1.0f, 1.0f, 331);
+    for (size_t i = 0; i < m.size(); ++i) {
+      const size_t j = i % 6;
+      m[i] = j < 3 ? 0.6f * r[i] : (j == 5 ? -3.0f : 0.0f) + 0.4f * r[i];
+    }
+    const MotionOptions o = warp_case_options(s);
+    const std::vector<float> h = random_floats(K * 3, 0.04f, 0.2f, 332);
+    std::vector<float> boxes;
+    for (size_t k = 0; k < K; ++k) {
+      const Vec3 q = motion_pivot(m.data() + k * F * 6, static_cast<int>(F));
+      boxes.insert(boxes.end(), {static_cast<float>(o.ax * q[0] / q[2]), static_cast<float>(o.ay * q[1] / q[2]),
+                                 static_cast<float>(1.0 + 2.0 / q[2])});
+      for (size_t d = 0; d < 3; ++d) {
+        const double half = s.variant == 1 && k == 0 && d == 2 ? 0.9 : h[k * 3 + d];
+        boxes.push_back(static_cast<float>(-std::log(half)));
+      }
+    }
+    std::vector<float> t = random_floats(K, -1.0f, 1.0f, 333);
+    return std::vector<std::vector<float>>{m, boxes, t};
+  };
+  // The host's double path: motion_matrix, box_depth_interval and sample_warp (which rounds
+  // its knots to float). The kernel's t = 1 + 1 / z and the cumulative sums are float32, a
+  // few ulp of values in [0, 1] each; 2e-5 leaves a factor of ten.
+  e.reference = [](const OpCase& c) {
+    const size_t K = c.shape.dims[0], F = c.shape.dims[1];
+    const MotionOptions o = warp_case_options(c.shape);
+    RayGeometry geo;
+    geo.ndc = true;
+    geo.ax = o.ax;
+    geo.ay = o.ay;
+    std::vector<DepthInterval> intervals;
+    for (size_t k = 0; k < K; ++k)
+      intervals.push_back(box_depth_interval(c.values[1].data() + k * 6,
+                                             motion_matrix(c.values[0].data() + k * F * 6, static_cast<int>(F), c.values[2][k]),
+                                             geo));
+    const std::vector<float> w = sample_warp(intervals, kWarpShare);
+    return std::vector<Expected>{{std::vector<double>(w.begin(), w.end()), {2e-5, 0}}};
+  };
+  e.flops = [](const OpShape& s) { return double(s.dims[0]) * (s.dims[1] * 3 + 8 * 40); };
+  return e;
+}
+
 }  // namespace
 
 void register_motion_ops(std::vector<OpEntry>& t) {
+  t.push_back(object_sample_warp_entry());
   t.push_back(rigid_motion_entry());
   t.push_back(motion_smoothness_entry());
   t.push_back(hash_positions_entry());

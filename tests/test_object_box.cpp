@@ -120,6 +120,39 @@ BOOST_AUTO_TEST_CASE(object_box_is_applied_after_object_motion) {
   };
   BOOST_TEST_REQUIRE((at("object-box") != options.end()));
   BOOST_TEST((at("object-motion") < at("object-box")));
+  // Samples crowd into the boxes (object_samples.hpp): after object-box, which turns them off.
+  BOOST_TEST_REQUIRE((at("object-samples") != options.end()));
+  BOOST_TEST((at("object-box") < at("object-samples")));
+}
+
+BOOST_AUTO_TEST_CASE(object_samples_need_boxes_and_leave_samples_spread) {
+  const auto refused = [](TrainConfig c, const std::string& names) {
+    try {
+      validate(c);
+      BOOST_FAIL("accepted: " + names);
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      BOOST_TEST(what.find("object-samples") != std::string::npos, what);
+      BOOST_TEST(what.find(names) != std::string::npos, what);
+    }
+  };
+  TrainConfig c = preset_config("quick");
+  set_config_value(c, "object-samples", "8");
+  validate(c);
+  // As many as the samples: none would be left for the background.
+  TrainConfig all = c;
+  set_config_value(all, "object-samples", std::to_string(c.samples));
+  refused(all, "samples");
+  // Without boxes (object-box false, or object-motion none, which drops the boxes): turned off
+  // with them, and an error when asked for after them.
+  for (const auto& [key, value] : {std::pair<std::string, std::string>{"object-box", "false"}, {"object-motion", "none"}}) {
+    TrainConfig off = c;
+    set_config_value(off, key, value);
+    BOOST_TEST(off.object_samples == 0);
+    validate(off);
+    set_config_value(off, "object-samples", "8");
+    refused(off, "object-box");
+  }
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -12,6 +12,7 @@
 #include "nova/io/pictures.hpp"
 #include "nova/model/field_graphs.hpp"
 #include "nova/model/fields.hpp"
+#include "nova/model/object_samples.hpp"
 #include "nova/sampling/rigid_motion.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/train/trainer.hpp"
@@ -164,18 +165,24 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
   // Stop at step 8 inside pretraining's hand-over (pretrain 5) and exactly at it (8): the
   // second half runs joint steps with augmentation (every 3rd from the first joint step).
   // With a rigid object motion too: its trajectory is a parameter like the others (set once
-  // on entering the joint phase, then trained), and so are the objects' own boxes.
+  // on entering the joint phase, then trained), and so are the objects' own boxes, into which
+  // a step's samples may crowd (read from the motion on the device).
   struct Case {
     int pretrain;
     ObjectMotion motion;
     bool object_box;
+    int object_samples;
   };
-  for (auto [pretrain, motion, object_box] : {Case{5, ObjectMotion::None, false}, Case{8, ObjectMotion::None, false},
-                                              Case{5, ObjectMotion::Rigid, false}, Case{5, ObjectMotion::Rigid, true}}) {
+  for (auto [pretrain, motion, object_box, object_samples] :
+       {Case{5, ObjectMotion::None, false, 0}, Case{8, ObjectMotion::None, false, 0},
+        Case{5, ObjectMotion::Rigid, false, 0}, Case{5, ObjectMotion::Rigid, true, 0},
+        Case{5, ObjectMotion::Rigid, true, 3}}) {
     TempDir dir("resume");
     TrainConfig c = tiny_config(Encoding::HashGrid);
     c.field.motion = motion;
     c.field.object_box = object_box;
+    c.object_samples = object_samples;
+    BOOST_REQUIRE(uses_object_samples(c, ray_geometry(scene), scene.num_objects) == (object_samples > 0));
     c.pretrain_steps = pretrain;
     c.steps = 11;
     c.rays = 64;

@@ -9,6 +9,7 @@
 #include "nova/model/fields.hpp"
 #include "nova/ops/tensor/tensor_ops.hpp"
 #include "nova/sampling/rays.hpp"
+#include "nova/sampling/sample_warp.hpp"
 
 namespace nova {
 namespace {
@@ -170,7 +171,7 @@ std::vector<int> object_grids(int objects) {
 
 std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int samples,
                                             const RayGeometry& geo, int rays, bool background,
-                                            int instances, bool hard_blend, bool packed) {
+                                            int instances, bool hard_blend, bool packed, bool warped) {
   const FieldConfig f = scene_field(field, geo);
   if (!background && instances < 1)
     throw Error("a view needs the background or at least one object instance");
@@ -186,8 +187,10 @@ std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& field, int sample
   v->pixels = g.input("pixels", Shape{R, 2});
   v->cameras = g.input("cameras", Shape{static_cast<size_t>(N), kCameraFloats});
   Rays r = generate_rays(v->pixels, v->cameras, {.ndc = geo.ndc});
+  if (warped && instances > 0) v->warp = g.input("warp", Shape{sample_warp_knots(static_cast<size_t>(instances)), 2});
   Samples smp = stratified_samples(r, Tensor{}, sample_options(samples, geo, N == 1 ? std::vector<int>{1}
-                                                                                  : std::vector<int>{1, N - 1}));
+                                                                                  : std::vector<int>{1, N - 1}),
+                                   v->warp);
   std::vector<Tensor> parts;
   if (background) {
     v->pack_static = new_select(packed, {0});

@@ -1,5 +1,6 @@
 #include "nova/model/view_renderer.hpp"
 
+#include "nova/model/object_samples.hpp"
 #include <algorithm>
 
 #include "nova/runtime/error.hpp"
@@ -206,7 +207,7 @@ ViewRenderer::Cached& ViewRenderer::graph_for(bool background, int instances, in
   if (!slot) {
     slot = std::make_unique<Cached>();
     slot->graph = build_view_graph(config_.field, config_.samples, geometry_, rays, background,
-                                   instances, hard_blend, packed);
+                                   instances, hard_blend, packed, uses_object_samples(config_, geometry_, instances));
     slot->exec = std::make_unique<Executor>(rt_, slot->graph->graph);
     slot->loaded_objects.assign(static_cast<size_t>(instances), 0);
     for (Tensor p : slot->graph->graph.parameters())
@@ -269,6 +270,16 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
     }
     c.exec->set(vg.transforms, xf);
     c.exec->set(vg.times, times);
+    if (vg.warp.valid()) {
+      const std::vector<float>& boxes = checkpoint_.array(kObjectBoxName).values;
+      std::vector<const float*> rows;
+      std::vector<Mat34> maps;
+      for (const PlacedInstance& i : instances) {
+        rows.push_back(boxes.data() + static_cast<size_t>(i.object - 1) * 6);
+        maps.push_back(object_transform(i));
+      }
+      c.exec->set(vg.warp, object_sample_warp(config_, geometry_, rows, maps));
+    }
   }
 
   const int W = req.camera.width, H = req.camera.height;

@@ -36,19 +36,24 @@ class GenerateRaysOp final : public Op {
 class StratifiedSamplesOp final : public Op {
  public:
   StratifiedSamplesOp(size_t rays, size_t nerfs, std::vector<int> groups, SampleOptions o,
-                      bool jitter)
-      : rays_(rays), nerfs_(nerfs), groups_(std::move(groups)), o_(std::move(o)), jitter_(jitter) {}
+                      bool jitter, size_t warp_knots)
+      : rays_(rays), nerfs_(nerfs), groups_(std::move(groups)), o_(std::move(o)), jitter_(jitter),
+        warp_knots_(warp_knots) {}
   std::string type() const override { return "stratified_samples"; }
 
-  // Inputs: origins, directions, viewdirs[, jitter]. Outputs: z, delta, then per group
-  // positions and viewdirs.
+  // Inputs: origins, directions, viewdirs[, jitter][, warp]. Outputs: z, delta, then per
+  // group positions and viewdirs.
   void forward(ExecContext& ctx) override {
     const unsigned R = detail::u32(rays_, "rays"), S = static_cast<unsigned>(o_.samples);
     const size_t rs = rays_ * o_.samples;
     cl_mem jitter = jitter_ ? ctx.in(3) : ctx.in(0);
+    // Without a warp the kernels read no knot; any buffer stands in for the argument.
+    cl_mem warp = warp_knots_ ? ctx.in(jitter_ ? 4 : 3) : ctx.in(0);
+    const unsigned W = static_cast<unsigned>(warp_knots_);
     ctx.launch("sampling", "sample_spacing")
         .arg(ctx.in(1)).arg(jitter).arg(ctx.out(0)).arg(ctx.out(1)).arg(R).arg(S)
         .arg(detail::u32(nerfs_, "nerfs")).arg(o_.near).arg(o_.far).arg(static_cast<int>(jitter_))
+        .arg(warp).arg(W)
         .run2(rs, nerfs_);
     unsigned first = 0;
     for (size_t g = 0; g < groups_.size(); ++g) {
@@ -56,7 +61,7 @@ class StratifiedSamplesOp final : public Op {
       ctx.launch("sampling", "sample_points")
           .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(jitter)
           .arg(ctx.out(2 + 2 * g)).arg(ctx.out(3 + 2 * g)).arg(R).arg(S).arg(first).arg(count)
-          .arg(o_.near).arg(o_.far).arg(static_cast<int>(jitter_))
+          .arg(o_.near).arg(o_.far).arg(static_cast<int>(jitter_)).arg(warp).arg(W)
           .run2(rs, count);
       first += count;
     }
@@ -69,6 +74,7 @@ class StratifiedSamplesOp final : public Op {
   std::vector<int> groups_;
   SampleOptions o_;
   bool jitter_;
+  size_t warp_knots_;
 };
 
 class InstancePointsOp final : public Op {
@@ -120,7 +126,7 @@ Rays generate_rays(Tensor pixels, Tensor cameras, const RayOptions& options) {
   return r;
 }
 
-Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions& options) {
+Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions& options, Tensor warp) {
   const std::string op = "stratified_samples";
   const Shape& rs = rays.origins.shape();
   if (rs.rank() != 3 || rs[2] != 3 || !(rays.directions.shape() == rs) ||
@@ -139,6 +145,9 @@ Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions&
   if (jitter.valid() && !(jitter.shape() == Shape{R, S}))
     bad(op, "jitter must be [R, S] = " + Shape{R, S}.str() + ", got " + jitter.shape().str());
   if (jitter.valid() && jitter.info().requires_grad) bad(op, "jitter cannot take a gradient");
+  if (warp.valid() && (warp.shape().rank() != 2 || warp.shape()[1] != 2 || warp.shape()[0] < 2))
+    bad(op, "warp must be [W, 2] knots with W >= 2, got " + warp.shape().str());
+  if (warp.valid() && warp.info().requires_grad) bad(op, "warp cannot take a gradient");
 
   Graph& g = *rays.origins.graph;
   Samples s;
@@ -154,7 +163,10 @@ Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions&
   }
   std::vector<Tensor> inputs = {rays.origins, rays.directions, rays.viewdirs};
   if (jitter.valid()) inputs.push_back(jitter);
-  g.add(std::make_unique<StratifiedSamplesOp>(R, N, groups, options, jitter.valid()), inputs, outputs);
+  if (warp.valid()) inputs.push_back(warp);
+  g.add(std::make_unique<StratifiedSamplesOp>(R, N, groups, options, jitter.valid(),
+                                              warp.valid() ? warp.shape()[0] : 0),
+        inputs, outputs);
   return s;
 }
 

@@ -10,6 +10,8 @@
 #include "nova/sampling/rigid_motion.hpp"
 #include "nova/ops/tensor/tensor_ops.hpp"
 #include "nova/sampling/rays.hpp"
+#include "nova/sampling/sample_warp.hpp"
+#include "nova/model/object_samples.hpp"
 #include "nova/render/render_composite.hpp"
 
 namespace nova {
@@ -109,13 +111,22 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   if (c.conventions.nerf_rgb_area && c.weights.nerf_rgb > 0.0f)
     s->target_nerf_rgb = g.input("target_nerf_rgb", Shape{N, R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
-  Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1, K}));
   const FieldConfig field = scene_field(c.field, geo);
+  // Samples crowd into the objects' boxes where they stand at the step's times (read from the
+  // motion on the device: the step needs nothing back from it).
+  Tensor warp;
+  if (uses_object_samples(c, geo, K)) {
+    s->motion = motion_parameter(g, K, motion_options(geo).frames);
+    warp = object_sample_warp(s->motion, object_box_parameter(g, K, K > 1), s->times, motion_options(geo),
+                              static_cast<double>(c.object_samples) / c.samples);
+  }
+  Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1, K}), warp);
   s->pack_static = new_select(c.occupancy, {0});
   s->pack_objects = new_select(c.occupancy, object_grids(K));
   Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
   if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
-  if (field.motion == ObjectMotion::Rigid) s->motion = motion_parameter(g, K, motion_options(geo).frames);
+  if (field.motion == ObjectMotion::Rigid && !s->motion.valid())
+    s->motion = motion_parameter(g, K, motion_options(geo).frames);
   if (field.motion == ObjectMotion::Rigid && field.encoding == Encoding::HashGrid && c.canonical_coarse_to_fine > 0)
     s->level_window = g.input("level_window", Shape{static_cast<size_t>(field.hash.outputs())});
   Tensor raw_objects = object_raw(smp.positions[1], s->times, field, geo, s->pack_objects, s->motion, s->level_window);

@@ -237,15 +237,25 @@ std::vector<ConfigOption> make_options() {
                  if (t == "none") {
                    c.field.motion = ObjectMotion::None;
                    c.field.object_box = false;  // a box of its own is the rigid model's canonical space
+                   c.object_samples = 0;
                  } else if (t == "rigid") c.field.motion = ObjectMotion::Rigid;
                  else bad_value("object-motion", v, "is not one of none, rigid");
                }});
   o.back().before = "none";
   // After object-motion, which turns it off with the rigid model: `--object-motion none` on a
   // preset with boxes trains the (x, y, z, t) field, while asking for a box as well is an error.
-  o.push_back(bool_option("object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object (object-motion none turns it off)",
-                          [](TrainConfig& c) -> bool& { return c.field.object_box; }));
+  o.push_back({"object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object (object-motion none turns it off)",
+               [](const TrainConfig& c) { return std::string(c.field.object_box ? "true" : "false"); },
+               [](TrainConfig& c, const std::string& v) {
+                 c.field.object_box = parse_bool("object-box", v);
+                 if (!c.field.object_box) c.object_samples = 0;  // samples crowd into the boxes
+               }});
   o.back().before = "false";
+  // After object-box, which turns it off: asking for both samples in the boxes and no boxes
+  // is an error.
+  o.push_back(int_option("object-samples", "object-box, forward-facing scenes: of each ray's samples, how many crowd into the depths of the objects' boxes at the view's time, shared evenly by the objects (0: every sample evenly spread; metric scenes always spread them)", 0, 1023,
+                         [](TrainConfig& c) -> int& { return c.object_samples; }));
+  o.back().before = "0";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
   o.push_back(int_option("canonical-coarse-to-fine", "object-motion rigid, hash grid (unused with the frequency encoding): joint steps over which the canonical grid's levels open from coarse to fine, so the motion aligns coarse shapes first (0: every level from the start)", 0, kBig,
@@ -329,6 +339,11 @@ void validate(const TrainConfig& c) {
   if (c.field.object_box && c.field.motion != ObjectMotion::Rigid)
     throw Error("option 'object-box': a box of its own is a rigid object's canonical space; it needs "
                 "'object-motion rigid' (object-motion is " + std::string(object_motion_name(c.field.motion)) + ")");
+  if (c.object_samples >= c.samples)
+    throw Error("option 'object-samples': " + std::to_string(c.object_samples) + " must be below samples " +
+                std::to_string(c.samples) + " (the rest stay evenly spread for the background)");
+  if (c.object_samples > 0 && !c.field.object_box)
+    throw Error("option 'object-samples': samples crowd into the objects' own boxes; it needs 'object-box true'");
   const NovelViewLossWeights& w = c.weights;
   if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");

@@ -63,6 +63,9 @@ struct ViewGraph {
   bool background = true;
   // cameras: [N, 16], the view's camera N times; times [instances, 1]
   Tensor pixels, cameras, transforms, times;
+  // With `warped`: where the samples crowd, [sample_warp_knots(instances), 2] knots
+  // (object_sample_warp in object_samples.hpp, from the instances' boxes and transforms).
+  Tensor warp;
   RenderOutputs out;
   // With `packed`: the packing of the static samples and of the instances' samples (set
   // grid_of_batch to each instance's object grid), against occupancy grids and the sample
@@ -73,7 +76,7 @@ struct ViewGraph {
 // object-NeRF copies each placed by a world-to-object transform at its own time.
 std::unique_ptr<ViewGraph> build_view_graph(const FieldConfig& f, int samples, const RayGeometry& g,
                                             int rays, bool background, int instances,
-                                            bool hard_blend, bool packed = false);
+                                            bool hard_blend, bool packed = false, bool warped = false);
 
 // Density probes for the occupancy grids: the static field at `points` positions and, with
 // objects > 0, every object field at `points` positions and times; the same parameter names

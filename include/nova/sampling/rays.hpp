@@ -57,8 +57,11 @@ struct Samples {
 
 // Stratified samples along `rays`. jitter: [R, S] uniform in [0, 1) while training (each
 // sample uniform within its stratum, as the reference's perturb = 1), or an empty Tensor{}
-// at inference (evenly spaced samples).
-Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions& options = {});
+// at inference (evenly spaced samples). warp: [W, 2] knots (sample_warp.hpp), the same for
+// every ray, that move the stratified depths (as fractions of [near, far]) to where more
+// samples are wanted; an empty Tensor{} leaves them evenly spread.
+Samples stratified_samples(const Rays& rays, Tensor jitter, const SampleOptions& options = {},
+                           Tensor warp = {});
 
 // Composition: the positions [M, 3] of one render's samples as seen by B placed object
 // instances. transforms [B, 12]: per instance the world-to-object map (the inverse of its
