@@ -234,44 +234,30 @@ __kernel void motion_smoothness_backward(__global const float* motion, __global 
 }
 
 // ---- Samples where the objects are (object_samples.hpp, sample_warp.hpp) ----
-// The warp of a training step's samples from the objects' boxes at their times: per object b
-// the depth fractions t its box [c - h, c + h] (canonical NDC, boxes[b] = (c, -log h)) spans
-// once the motion at times[b] moves it back into the scene (x = R^T (y - q) + tau), then the
-// knots (u, t) of the mixture (1 - share) even + share split evenly over the intervals.
-// One work-item (K <= kMaxWarpObjects objects: a few dozen numbers). As sample_warp on the host.
-#define kMaxWarpObjects 16
+// The warp of a training step's samples from where the objects stand at their times: object
+// b's pivot is at its motion's translation tau(times[b]) (the motion maps tau to the pivot),
+// and its range is the depth fractions t = 1 + near / z of world z within reach * radius[b]
+// of tau's. Then the knots (u, t) of the mixture (1 - share) even + share split evenly over
+// the ranges. One work-item (K <= kMaxWarpObjects: a few hundred numbers). As sample_warp and
+// depth_interval on the host.
+#define kMaxWarpObjects 64
 #define kMinWarpInterval 1e-3f
 
-__kernel void object_sample_warp(__global const float* motion, __global const float* boxes,
+inline float depth_fraction(float z, float near) { return z < -near ? 1.0f + near / z : 0.0f; }
+
+__kernel void object_sample_warp(__global const float* motion, __global const float* radius,
                                  __global const float* times, __global float* warp, uint K,
-                                 uint frames, float ax, float ay, float near, float share) {
+                                 uint frames, float near, float share, float reach) {
   if (get_global_id(0) != 0) return;
   float lo[kMaxWarpObjects], hi[kMaxWarpObjects];
   uint kept = 0;
   for (uint b = 0; b < K; ++b) {
-    __global const float* P = motion + (size_t)b * frames * 6;
-    __global const float* box = boxes + (size_t)b * 6;
     uint f0;
-    float w, m[6], R[9], dR[27], q[3];
+    float w, m[6];
     motion_frame(times[b], frames, &f0, &w);
-    motion_params(P, f0, w, frames, m);
-    motion_rotation(m, R, dR);
-    motion_pivot(P, frames, q);
-    float l = 1.0f, h = 0.0f;
-    for (int i = 0; i < 8; ++i) {
-      float y[3];
-      for (int d = 0; d < 3; ++d) y[d] = box[d] + (((i >> d) & 1) ? 1.0f : -1.0f) * exp(-box[3 + d]);
-      if (y[2] >= 1.0f) {  // NDC's far end: infinite depth
-        h = 1.0f;
-        continue;
-      }
-      const float z = 2.0f * near / (y[2] - 1.0f);
-      const float c[3] = {y[0] * z / ax - q[0], y[1] * z / ay - q[1], z - q[2]};
-      const float xz = R[2] * c[0] + R[5] * c[1] + R[8] * c[2] + m[5];
-      const float t = xz < -near ? 1.0f + near / xz : 0.0f;
-      l = fmin(l, t);
-      h = fmax(h, t);
-    }
+    motion_params(motion + (size_t)b * frames * 6, f0, w, frames, m);
+    const float r = reach * radius[b];
+    float l = depth_fraction(m[5] + r, near), h = depth_fraction(m[5] - r, near);
     if (!(h > l)) continue;
     if (h - l < kMinWarpInterval) {
       const float mid = 0.5f * (l + h);

@@ -243,9 +243,10 @@ OpEntry hash_positions_entry() {
 }
 
 
-// object_sample_warp: dims objects K, frames F; variant 1 stretches one box past NDC's far end
-// (a corner at infinite depth: its interval reaches t = 1). Motions as motion_case_values
-// (about world z = -3); boxes about the pivot's NDC image, 0.04-0.2 NDC units each way.
+// object_sample_warp: dims objects K, frames F; variant 1 puts object 0 across the near plane
+// (its range clipped at t = 0) and object 1 wholly in front of it (no range: its share goes
+// back to the even spread). Motions as motion_case_values (about world z = -3), radii
+// 0.05-0.3 world units.
 MotionOptions warp_case_options(const OpShape& s) {
   MotionOptions o;
   o.frames = static_cast<int>(s.dims[1]);
@@ -255,19 +256,19 @@ MotionOptions warp_case_options(const OpShape& s) {
   return o;
 }
 
-constexpr double kWarpShare = 0.4;
+constexpr double kWarpShare = 0.4;  // object_samples 4 of samples 10
 
 OpEntry object_sample_warp_entry() {
   OpEntry e;
   e.name = "object_sample_warp";
   e.shapes = {{{1, 5}, 0, "1 object x 5 frames"}, {{3, 7}, 0, "3 objects x 7 frames"},
-              {{2, 4}, 1, "2 objects x 4 frames, one box to infinity"}};
+              {{2, 4}, 1, "2 objects x 4 frames, at and before the near plane"}};
   e.build = [](Graph& g, const OpShape& s) {
     const size_t K = s.dims[0], F = s.dims[1];
     Tensor m = g.input("motion", K > 1 ? Shape{K, F, 6} : Shape{F, 6});
-    Tensor b = g.input("boxes", K > 1 ? Shape{K, 6} : Shape{6});
+    Tensor r = g.input("radius", Shape{K});
     Tensor t = g.input("times", Shape{K, 1});
-    return OpGraph{{m, b, t}, {object_sample_warp(m, b, t, warp_case_options(s), kWarpShare)}, {}};
+    return OpGraph{{m, r, t}, {object_sample_warp(m, r, t, warp_case_options(s), kWarpShare, kObjectSampleRadii)}, {}};
   };
   e.values = [](const OpShape& s) {
     const size_t K = s.dims[0], F = s.dims[1];
@@ -277,40 +278,34 @@ OpEntry object_sample_warp_entry() {
       const size_t j = i % 6;
       m[i] = j < 3 ? 0.6f * r[i] : (j == 5 ? -3.0f : 0.0f) + 0.4f * r[i];
     }
-    const MotionOptions o = warp_case_options(s);
-    const std::vector<float> h = random_floats(K * 3, 0.04f, 0.2f, 332);
-    std::vector<float> boxes;
-    for (size_t k = 0; k < K; ++k) {
-      const Vec3 q = motion_pivot(m.data() + k * F * 6, static_cast<int>(F));
-      boxes.insert(boxes.end(), {static_cast<float>(o.ax * q[0] / q[2]), static_cast<float>(o.ay * q[1] / q[2]),
-                                 static_cast<float>(1.0 + 2.0 / q[2])});
-      for (size_t d = 0; d < 3; ++d) {
-        const double half = s.variant == 1 && k == 0 && d == 2 ? 0.9 : h[k * 3 + d];
-        boxes.push_back(static_cast<float>(-std::log(half)));
+    if (s.variant == 1)
+      for (size_t f = 0; f < F; ++f) {
+        m[f * 6 + 5] = -1.2f + 0.01f * static_cast<float>(f);  // object 0 about the near plane
+        m[(F + f) * 6 + 5] = -0.2f;                             // object 1 in front of it
       }
-    }
-    std::vector<float> t = random_floats(K, -1.0f, 1.0f, 333);
-    return std::vector<std::vector<float>>{m, boxes, t};
+    return std::vector<std::vector<float>>{m, random_floats(K, 0.05f, 0.3f, 332), random_floats(K, -1.0f, 1.0f, 333)};
   };
-  // The host's double path: motion_matrix, box_depth_interval and sample_warp (which rounds
-  // its knots to float). The kernel's t = 1 + 1 / z and the cumulative sums are float32, a
-  // few ulp of values in [0, 1] each; 2e-5 leaves a factor of ten.
+  // The host's double path: motion_matrix and its pivot put the centre, depth_interval and
+  // sample_warp (which rounds its knots to float) make the warp. The kernel's t = 1 + 1 / z
+  // and cumulative sums are float32, a few ulp of values in [0, 1] each; 2e-5 leaves a factor
+  // of ten.
   e.reference = [](const OpCase& c) {
     const size_t K = c.shape.dims[0], F = c.shape.dims[1];
-    const MotionOptions o = warp_case_options(c.shape);
-    RayGeometry geo;
-    geo.ndc = true;
-    geo.ax = o.ax;
-    geo.ay = o.ay;
-    std::vector<DepthInterval> intervals;
-    for (size_t k = 0; k < K; ++k)
-      intervals.push_back(box_depth_interval(c.values[1].data() + k * 6,
-                                             motion_matrix(c.values[0].data() + k * F * 6, static_cast<int>(F), c.values[2][k]),
-                                             geo));
-    const std::vector<float> w = sample_warp(intervals, kWarpShare);
+    std::vector<Vec3> centres;
+    std::vector<double> radii;
+    for (size_t k = 0; k < K; ++k) {
+      const float* rows = c.values[0].data() + k * F * 6;
+      const Mat34 to_canonical = motion_matrix(rows, static_cast<int>(F), c.values[2][k]);
+      centres.push_back(apply_rigid(invert_rigid(to_canonical), motion_pivot(rows, static_cast<int>(F))));
+      radii.push_back(c.values[1][k]);
+    }
+    ModelConfig mc;
+    mc.samples = 10;
+    mc.object_samples = 4;  // the share 0.4
+    const std::vector<float> w = object_sample_warp(mc, centres, radii);
     return std::vector<Expected>{{std::vector<double>(w.begin(), w.end()), {2e-5, 0}}};
   };
-  e.flops = [](const OpShape& s) { return double(s.dims[0]) * (s.dims[1] * 3 + 8 * 40); };
+  e.flops = [](const OpShape& s) { return double(s.dims[0]) * 40 + double(s.dims[0] * s.dims[0]) * 8; };
   return e;
 }
 

@@ -1,8 +1,8 @@
 // Samples where the objects are (sample_warp.hpp, object_samples.hpp): the warp's knots hold
 // the mixture they promise, warped stratified samples against a float64 inverse of that
-// mixture (found by bisection, not from the knots), and an object box's depth interval
-// against points inside the box. The device warp of a training step is the op table's
-// object_sample_warp entry; training and resuming with it, test_train.cpp.
+// mixture (found by bisection, not from the knots), and an object's depth range. The device
+// warp of a training step is the op table's object_sample_warp entry; training and resuming
+// with it, test_train.cpp; the option, test_object_box.cpp.
 #include <boost/test/unit_test.hpp>
 #include <algorithm>
 #include <cmath>
@@ -149,49 +149,26 @@ BOOST_AUTO_TEST_CASE(warped_samples_follow_the_mixture) {
   }
 }
 
-BOOST_AUTO_TEST_CASE(a_box_interval_holds_the_whole_box) {
-  // A box about world (0.3, -0.2, -3) seen through a turned, moved map: every point of it
-  // (random points and its corners, canonical NDC -> world) lies within the interval, and the
-  // interval's ends are its corners' depths.
-  RayGeometry geo;
-  geo.ndc = true;
-  geo.ax = -1.7f;
-  geo.ay = -1.3f;
-  const Vec3 centre{0.3, -0.2, -3.0};
-  const std::array<float, 6> box = {static_cast<float>(geo.ax * centre[0] / centre[2]),
-                                    static_cast<float>(geo.ay * centre[1] / centre[2]),
-                                    static_cast<float>(1.0 + 2.0 / centre[2]), static_cast<float>(-std::log(0.05)),
-                                    static_cast<float>(-std::log(0.04)), static_cast<float>(-std::log(0.08))};
-  const Mat3 R = euler_xyz_to_matrix({0.4, -0.7, 0.2});
-  const Mat34 world_to_canonical{R[0], R[1], R[2], 0.1, R[3], R[4], R[5], -0.3, R[6], R[7], R[8], 0.5};
-  const DepthInterval in = box_depth_interval(box.data(), world_to_canonical, geo);
-  BOOST_REQUIRE(in.hi > in.lo);
-  const Mat34 to_world = invert_rigid(world_to_canonical);
-  const auto t_of = [&](const Vec3& q) {
-    const double z = 2.0 / (q[2] - 1.0);
-    const Vec3 x = apply_rigid(to_world, {q[0] * z / geo.ax, q[1] * z / geo.ay, z});
-    return 1.0 + 1.0 / x[2];
-  };
-  const auto u = random_floats(3000, -1, 1, 43);
-  double lo = 1, hi = 0;
-  for (size_t i = 0; i < u.size(); i += 3) {
-    Vec3 q;
-    for (size_t d = 0; d < 3; ++d) q[d] = box[d] + u[i + d] * std::exp(-double(box[3 + d]));
-    const double t = t_of(q);
-    BOOST_TEST((t >= in.lo - 1e-12 && t <= in.hi + 1e-12), "point " << i / 3 << " at " << t);
-  }
-  for (int c = 0; c < 8; ++c) {
-    Vec3 q;
-    for (size_t d = 0; d < 3; ++d) q[d] = box[d] + ((c >> d) & 1 ? 1 : -1) * std::exp(-double(box[3 + d]));
-    lo = std::min(lo, t_of(q));
-    hi = std::max(hi, t_of(q));
-  }
-  BOOST_TEST(std::abs(lo - in.lo) < 1e-12);
-  BOOST_TEST(std::abs(hi - in.hi) < 1e-12);
-  // A box through NDC's far end reaches t = 1.
-  std::array<float, 6> deep = box;
-  deep[5] = static_cast<float>(-std::log(0.9));
-  BOOST_TEST(box_depth_interval(deep.data(), world_to_canonical, geo).hi == 1.0);
+BOOST_AUTO_TEST_CASE(an_object_range_is_its_depths_about_the_pivot) {
+  // World depths 2.5 to 3.5 about a centre at z = -3: t = 1 - 1 / depth at both ends; a range
+  // across the near plane starts at t = 0, one wholly in front of it is empty.
+  const DepthInterval in = depth_interval({0.4, -0.2, -3.0}, 0.5);
+  BOOST_TEST(std::abs(in.lo - (1.0 - 1.0 / 2.5)) < 1e-15);
+  BOOST_TEST(std::abs(in.hi - (1.0 - 1.0 / 3.5)) < 1e-15);
+  const DepthInterval near = depth_interval({0, 0, -1.2}, 0.5);
+  BOOST_TEST(near.lo == 0.0);
+  BOOST_TEST(std::abs(near.hi - (1.0 - 1.0 / 1.7)) < 1e-15);
+  const DepthInterval before = depth_interval({0, 0, -0.3}, 0.5);
+  BOOST_TEST(!(before.hi > before.lo));
+  // A view's warp shares object_samples / samples over the ranges at kObjectSampleRadii radii.
+  ModelConfig c;
+  c.samples = 48;
+  c.object_samples = 16;
+  const auto k = knots_of(object_sample_warp(c, {{0.4, -0.2, -3.0}}, {0.25}));
+  BOOST_REQUIRE(k.size() == 4u);
+  BOOST_TEST(std::abs(k[1][1] - in.lo) < 1e-7);
+  BOOST_TEST(std::abs(k[2][1] - in.hi) < 1e-7);
+  BOOST_TEST(std::abs((k[2][0] - k[1][0]) - (32.0 / 48.0 * (in.hi - in.lo) + 16.0 / 48.0)) < 1e-6);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

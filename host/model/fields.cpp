@@ -93,7 +93,8 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c,
   const bool rigid = c.motion == ObjectMotion::Rigid;
   if (rigid && c.deform_width > 0) positions = deform_positions(positions, times, c, networks);
   if (rigid && c.object_box) {
-    positions = box_coordinates(positions, object_box_parameter(*positions.graph, networks, batched));
+    const Shape bs = batched ? Shape{static_cast<size_t>(networks), 6} : Shape{6};
+    positions = box_coordinates(positions, positions.graph->parameter(kObjectBoxName, bs, Init::zeros()));
   }
   Tensor xyzt = rigid ? positions : concat({positions, times});
   Tensor encoded = encode(xyzt, c, object_hash_config(c), "objects.hash", networks);
@@ -109,17 +110,6 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& c,
   Tensor hidden = dense_layer(colour_in, std::max(1, c.width / 2), Activation::ReLU, "objects.colour", networks);
   Tensor rgb = dense_layer(hidden, 3, Activation::Identity, "objects.rgb", networks);
   return concat({rgb, sigma_blend});
-}
-
-Tensor object_box_parameter(Graph& g, int networks, bool batched) {
-  const Shape shape = batched ? Shape{static_cast<size_t>(networks), 6} : Shape{6};
-  for (Tensor p : g.parameters())
-    if (p.info().name == kObjectBoxName) {
-      if (!(p.shape() == shape))
-        throw Error("object fields: the graph's object boxes are " + p.shape().str() + ", not " + shape.str(), kExitInternal);
-      return p;
-    }
-  return g.parameter(kObjectBoxName, shape, Init::zeros());
 }
 
 }  // namespace nova

@@ -1,10 +1,10 @@
 #include "nova/model/view_renderer.hpp"
 
-#include "nova/model/object_samples.hpp"
 #include <algorithm>
 
 #include "nova/runtime/error.hpp"
 #include "nova/model/fields.hpp"
+#include "nova/model/object_samples.hpp"
 #include "nova/sampling/rays.hpp"
 #include "nova/render/render_composite.hpp"
 
@@ -271,14 +271,16 @@ ViewImage ViewRenderer::render(const ViewRequest& req) {
     c.exec->set(vg.transforms, xf);
     c.exec->set(vg.times, times);
     if (vg.warp.valid()) {
-      const std::vector<float>& boxes = checkpoint_.array(kObjectBoxName).values;
-      std::vector<const float*> rows;
-      std::vector<Mat34> maps;
+      // Each instance's pivot where its motion and placement put it (object_samples.hpp).
+      const std::vector<float>& radius = checkpoint_.array(kObjectRadiusName).values;
+      std::vector<Vec3> centres;
+      std::vector<double> radii;
       for (const PlacedInstance& i : instances) {
-        rows.push_back(boxes.data() + static_cast<size_t>(i.object - 1) * 6);
-        maps.push_back(object_transform(i));
+        const Vec3 pivot = motion_pivot(motion_rows(i.object), motion_options(geometry_).frames);
+        centres.push_back(apply_rigid(invert_rigid(object_transform(i)), pivot));
+        radii.push_back(radius.at(static_cast<size_t>(i.object - 1)));
       }
-      c.exec->set(vg.warp, object_sample_warp(config_, geometry_, rows, maps));
+      c.exec->set(vg.warp, object_sample_warp(config_, centres, radii));
     }
   }
 

@@ -11,13 +11,14 @@ namespace {
 
 class ObjectSampleWarpOp final : public Op {
  public:
-  ObjectSampleWarpOp(size_t objects, const MotionOptions& o, float share) : objects_(objects), o_(o), share_(share) {}
+  ObjectSampleWarpOp(size_t objects, const MotionOptions& o, float share, float reach)
+      : objects_(objects), o_(o), share_(share), reach_(reach) {}
   std::string type() const override { return "object_sample_warp"; }
   void forward(ExecContext& ctx) override {
     ctx.launch("rigid_motion", "object_sample_warp")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.out(0))
         .arg(detail::u32(objects_, "objects")).arg(static_cast<unsigned>(o_.frames))
-        .arg(o_.ax).arg(o_.ay).arg(o_.ndc_near).arg(share_)
+        .arg(o_.ndc_near).arg(share_).arg(reach_)
         .run(1);
   }
   // Where samples go is data: the warp takes no gradient, and sends none to the motion.
@@ -28,7 +29,7 @@ class ObjectSampleWarpOp final : public Op {
  private:
   size_t objects_;
   MotionOptions o_;
-  float share_;
+  float share_, reach_;
 };
 
 }  // namespace
@@ -79,15 +80,16 @@ std::vector<float> sample_warp(const std::vector<DepthInterval>& intervals, doub
   return knots;
 }
 
-Tensor object_sample_warp(Tensor motion, Tensor boxes, Tensor times, const MotionOptions& o, double share) {
+Tensor object_sample_warp(Tensor motion, Tensor radius, Tensor times, const MotionOptions& o, double share,
+                          double reach) {
   const std::string op = "object_sample_warp";
-  if (!o.ndc) detail::bad_op(op, "samples crowd into boxes on forward-facing (NDC) scenes only");
+  if (!o.ndc) detail::bad_op(op, "samples crowd about objects on forward-facing (NDC) scenes only");
   if (!(share >= 0.0 && share < 1.0)) detail::bad_op(op, "share must be in [0, 1)");
-  const Shape& bs = boxes.shape();
-  const size_t K = bs.rank() == 1 && bs[0] == 6 ? 1 : bs.rank() == 2 && bs[1] == 6 ? bs[0] : 0;
+  if (!(reach > 0.0)) detail::bad_op(op, "reach must be positive");
+  const size_t K = radius.shape().rank() == 1 ? radius.shape()[0] : 0;
   if (K == 0 || K > kMaxWarpObjects)
-    detail::bad_op(op, "boxes must be [K, 6] (or [6] for one) with 1 <= K <= " + std::to_string(kMaxWarpObjects) +
-                           ", got " + bs.str());
+    detail::bad_op(op, "radius must be [K] with 1 <= K <= " + std::to_string(kMaxWarpObjects) + ", got " +
+                           radius.shape().str());
   const Shape motion_shape = K == 1 ? Shape{static_cast<size_t>(o.frames), 6}
                                     : Shape{K, static_cast<size_t>(o.frames), 6};
   if (!(motion.shape() == motion_shape))
@@ -96,7 +98,8 @@ Tensor object_sample_warp(Tensor motion, Tensor boxes, Tensor times, const Motio
   detail::require_data(op, times);
   Graph& g = *motion.graph;
   Tensor warp = g.activation("samples.warp", Shape{sample_warp_knots(K), 2});
-  g.add(std::make_unique<ObjectSampleWarpOp>(K, o, static_cast<float>(share)), {motion, boxes, times}, {warp});
+  g.add(std::make_unique<ObjectSampleWarpOp>(K, o, static_cast<float>(share), static_cast<float>(reach)),
+        {motion, radius, times}, {warp});
   return warp;
 }
 

@@ -112,13 +112,17 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
     s->target_nerf_rgb = g.input("target_nerf_rgb", Shape{N, R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
   const FieldConfig field = scene_field(c.field, geo);
-  // Samples crowd into the objects' boxes where they stand at the step's times (read from the
+  // Samples crowd about the objects where they stand at the step's times (read from the
   // motion on the device: the step needs nothing back from it).
   Tensor warp;
   if (uses_object_samples(c, geo, K)) {
+    if (static_cast<size_t>(K) > kMaxWarpObjects)
+      throw Error("option 'object-samples': samples crowd about at most " + std::to_string(kMaxWarpObjects) +
+                  " objects, the scene has " + std::to_string(K) + " (pass --object-samples 0)");
     s->motion = motion_parameter(g, K, motion_options(geo).frames);
-    warp = object_sample_warp(s->motion, object_box_parameter(g, K, K > 1), s->times, motion_options(geo),
-                              static_cast<double>(c.object_samples) / c.samples);
+    Tensor radius = g.parameter(kObjectRadiusName, Shape{static_cast<size_t>(K)}, Init::zeros());
+    warp = object_sample_warp(s->motion, radius, s->times, motion_options(geo),
+                              static_cast<double>(c.object_samples) / c.samples, kObjectSampleRadii);
   }
   Samples smp = stratified_samples(rays, s->jitter, sample_options(c.samples, geo, {1, K}), warp);
   s->pack_static = new_select(c.occupancy, {0});

@@ -244,16 +244,11 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "none";
   // After object-motion, which turns it off with the rigid model: `--object-motion none` on a
   // preset with boxes trains the (x, y, z, t) field, while asking for a box as well is an error.
-  o.push_back({"object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object (object-motion none turns it off)",
-               [](const TrainConfig& c) { return std::string(c.field.object_box ? "true" : "false"); },
-               [](TrainConfig& c, const std::string& v) {
-                 c.field.object_box = parse_bool("object-box", v);
-                 if (!c.field.object_box) c.object_samples = 0;  // samples crowd into the boxes
-               }});
+  o.push_back(bool_option("object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object (object-motion none turns it off)",
+                          [](TrainConfig& c) -> bool& { return c.field.object_box; }));
   o.back().before = "false";
-  // After object-box, which turns it off: asking for both samples in the boxes and no boxes
-  // is an error.
-  o.push_back(int_option("object-samples", "object-box, forward-facing scenes: of each ray's samples, how many crowd into the depths of the objects' boxes at the view's time, shared evenly by the objects (0: every sample evenly spread; metric scenes always spread them)", 0, 1023,
+  // After object-motion too, which turns it off.
+  o.push_back(int_option("object-samples", "object-motion rigid, forward-facing scenes: of each ray's samples, how many crowd into the depths within two radii of where each object stands at the view's time, shared evenly by the objects (0: every sample evenly spread; metric scenes always spread them; object-motion none turns it off)", 0, 1023,
                          [](TrainConfig& c) -> int& { return c.object_samples; }));
   o.back().before = "0";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
@@ -342,8 +337,9 @@ void validate(const TrainConfig& c) {
   if (c.object_samples >= c.samples)
     throw Error("option 'object-samples': " + std::to_string(c.object_samples) + " must be below samples " +
                 std::to_string(c.samples) + " (the rest stay evenly spread for the background)");
-  if (c.object_samples > 0 && !c.field.object_box)
-    throw Error("option 'object-samples': samples crowd into the objects' own boxes; it needs 'object-box true'");
+  if (c.object_samples > 0 && c.field.motion != ObjectMotion::Rigid)
+    throw Error("option 'object-samples': samples crowd about where a rigid object's motion puts it; it needs "
+                "'object-motion rigid' (object-motion is " + std::string(object_motion_name(c.field.motion)) + ")");
   const NovelViewLossWeights& w = c.weights;
   if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "nova/model/object_samples.hpp"
 #include "nova/runtime/error.hpp"
 #include "nova/train/motion_init.hpp"
 #include "nova/train/pixel_batch.hpp"
@@ -137,9 +138,10 @@ void Trainer::ensure_phase() {
   if (g->motion.valid() && step_ == config_.pretrain_steps) {
     const MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e);
     e->set(g->motion, start.rows);
-    for (Tensor p : g->graph.parameters())
-      if (p.info().name == kObjectBoxName)
-        e->set(p, start.boxes);
+    for (Tensor p : g->graph.parameters()) {
+      if (p.info().name == kObjectBoxName) e->set(p, start.boxes);
+      if (p.info().name == kObjectRadiusName) e->set(p, start.radii);
+    }
   }
   exec_.reset();
   graph_ = std::move(g);

@@ -111,10 +111,6 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& co
 
 // The name of the object boxes' parameter ([K, 6] or [6]; box_coordinates' rows).
 inline const char* const kObjectBoxName = "objects.box";
-// The graph's object boxes' parameter of `networks` networks ([networks, 6] when batched,
-// else [6]), made on the first call: the fields encode with it, and a training step's samples
-// crowd into it (object_samples.hpp).
-Tensor object_box_parameter(Graph& g, int networks, bool batched);
 
 // Parameter name prefixes, for checkpoints and the inference renderer.
 inline const std::string kStaticPrefix = "static.";

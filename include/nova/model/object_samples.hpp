@@ -1,10 +1,15 @@
 #pragma once
 // Samples where the objects are: ModelConfig::object_samples of each ray's samples crowd into
-// the depth ranges of the rigid objects' boxes (FieldConfig::object_box) at the view's time,
-// the rest stay evenly spread (sample_warp.hpp). Evenly spread samples put one or two across a
-// small object (a box 0.4 units deep at depth 3 spans 0.05 of NDC's [0, 1], under two of 32
-// strata), so its density has to fill a whole stratum along each training ray; in its box the
-// object gets the samples a sharp surface needs.
+// the depth ranges that hold the rigid objects at the view's time, the rest stay evenly spread
+// (sample_warp.hpp). Evenly spread samples put one or two across a small object (an object
+// 0.5 units deep at depth 2.8 spans 0.06 of NDC's [0, 1], two of 32 strata), so its density
+// has to fill whole strata along each training ray, a slab that a turning object then shows
+// sideways as blur; crowded, the object gets the samples a sharp surface needs.
+//
+// An object's range: the depths within kObjectSampleRadii of its radius (kObjectRadiusName,
+// from its masks) about where its motion puts its pivot at that time (the pivot, the mean of
+// the trajectory's translations, sits where the frames' anchors are: on the object, whose
+// centre lies up to a radius behind its visible surface).
 //
 // Forward-facing (NDC) scenes only: there a sample's fraction t of the ray is its world depth
 // alone, t = 1 - near / depth (near plane 1), the same on every ray of any camera, so one warp
@@ -18,22 +23,21 @@
 
 namespace nova {
 
-// Whether a model of `objects` object NeRFs crowds samples into their boxes on this scene.
+// Each object's radius in world units ([K]), set from its masks when the joint phase starts
+// (initial_motion) and never learned: what a view's samples crowd about.
+inline const char* const kObjectRadiusName = "objects.radius";
+inline constexpr double kObjectSampleRadii = 2.0;
+
+// Whether a model of `objects` rigid objects crowds samples about them on this scene.
 bool uses_object_samples(const ModelConfig& c, const RayGeometry& geo, int objects);
 
-// The fractions of the NDC sample range that hold an object's box: box_row is its
-// box_coordinates row (centre and log scale in canonical NDC, object_box_row),
-// world_to_canonical the map from the view's world to its canonical space (motion_matrix at
-// the view's time, composed with an instance's placement). The box's eight corners bound it
-// (NDC and its inverse keep straight lines, a rigid map keeps them too). A box that reaches
-// NDC's far end (a corner at infinite depth) reaches t = 1.
-DepthInterval box_depth_interval(const float* box_row, const Mat34& world_to_canonical, const RayGeometry& geo);
+// The fractions of the NDC sample range within `reach` world units in depth of the world
+// point `centre` (empty for a range wholly in front of the near plane).
+DepthInterval depth_interval(const Vec3& centre, double reach);
 
-// The warp of a view whose objects' boxes are `box_rows` (one pointer to 6 floats each) seen
-// through `world_to_canonical` (one map each): c.object_samples / c.samples of the samples
-// shared evenly by the boxes' intervals.
-std::vector<float> object_sample_warp(const ModelConfig& c, const RayGeometry& geo,
-                                      const std::vector<const float*>& box_rows,
-                                      const std::vector<Mat34>& world_to_canonical);
+// The warp of a view whose objects' pivots stand at `centres` (world) with `radii`:
+// c.object_samples / c.samples of the samples shared evenly by their ranges.
+std::vector<float> object_sample_warp(const ModelConfig& c, const std::vector<Vec3>& centres,
+                                      const std::vector<double>& radii);
 
 }  // namespace nova

@@ -33,13 +33,14 @@ inline constexpr double kMinWarpInterval = 1e-3;
 // [0, 1]; one left empty there gives its share back to the even spread. share in [0, 1).
 std::vector<float> sample_warp(const std::vector<DepthInterval>& intervals, double share);
 
-// The same on the device for a training step, whose objects' boxes move with a learned motion:
-// motion [K, F, 6] (or [F, 6]; the parameter, read, never differentiated), boxes [K, 6] (or
-// [6]; box_coordinates rows in canonical NDC, object_box_row), times [K, 1] -> the warp
-// [sample_warp_knots(K), 2] of the intervals the boxes span at those times
-// (box_depth_interval in object_samples.hpp is the host's, and this op's reference).
+// The same on the device for a training step, whose objects move with a learned motion:
+// motion [K, F, 6] (or [F, 6]; the parameter, read, never differentiated), radius [K] (world
+// units), times [K, 1] -> the warp [sample_warp_knots(K), 2] whose intervals hold the world
+// depths within reach * radius[k] of object k's translation at its time (depth_interval and
+// object_sample_warp in object_samples.hpp are the host's, and this op's reference).
 // Forward-facing scenes (options.ndc), at most kMaxWarpObjects objects.
-inline constexpr size_t kMaxWarpObjects = 16;
-Tensor object_sample_warp(Tensor motion, Tensor boxes, Tensor times, const MotionOptions& options, double share);
+inline constexpr size_t kMaxWarpObjects = 64;
+Tensor object_sample_warp(Tensor motion, Tensor radius, Tensor times, const MotionOptions& options, double share,
+                          double reach);
 
 }  // namespace nova

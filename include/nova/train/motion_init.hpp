@@ -24,6 +24,7 @@ namespace nova {
 struct MotionStart {
   std::vector<float> rows;   // [K, F, 6]
   std::vector<float> boxes;  // [K, 6]: each object's box (FieldConfig::object_box), object_box_row
+  std::vector<float> radii;  // [K]: each object's radius in world units (kObjectRadiusName)
 };
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
                            int samples, Executor& trained);
