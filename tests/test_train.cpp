@@ -160,6 +160,16 @@ BOOST_AUTO_TEST_CASE(learns_the_tiny_scene_with_rigid_objects) {
   check_learns_the_tiny_scene(c);
 }
 
+BOOST_AUTO_TEST_CASE(learns_the_tiny_scene_with_samples_about_the_objects) {
+  // A third of the samples crowded about the objects, in training (the device's warp) and in
+  // the renders that score it (the host's, per instance). Measured 17.93 dB, a loss ratio of
+  // 0.45, under OpenBLAS's default, Haswell and Zen kernels: the floors above hold.
+  TrainConfig c = tiny_config(Encoding::HashGrid);
+  c.object_samples = 8;
+  BOOST_REQUIRE(uses_object_samples(c, ray_geometry(tiny_scene()), tiny_scene().num_objects));
+  check_learns_the_tiny_scene(c);
+}
+
 BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
   const Scene scene = tiny_scene();
   // Stop at step 8 inside pretraining's hand-over (pretrain 5) and exactly at it (8): the
