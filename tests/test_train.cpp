@@ -170,6 +170,22 @@ BOOST_AUTO_TEST_CASE(learns_the_tiny_scene_with_samples_about_the_objects) {
   check_learns_the_tiny_scene(c);
 }
 
+BOOST_AUTO_TEST_CASE(samples_about_too_many_objects_are_refused_before_training) {
+  // The device warp holds kMaxWarpObjects objects: a scene with more is an error that names
+  // the option and the count, before the run folder is made.
+  Scene scene = tiny_scene();
+  const int K = static_cast<int>(kMaxWarpObjects) + 1;
+  for (Frame& f : scene.frames)
+    while (f.masks.size() < static_cast<size_t>(K) + 1) f.masks.push_back(f.masks.back());
+  scene.num_objects = K;
+  TrainConfig c = tiny_config(Encoding::HashGrid);
+  c.object_samples = 8;
+  TempDir dir("too_many");
+  expect_error([&] { Trainer t(runtime(), scene, c, (dir / "run").string()); },
+               {"object-samples", std::to_string(K)});
+  BOOST_TEST(!std::filesystem::exists(dir / "run"));
+}
+
 BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
   const Scene scene = tiny_scene();
   // Stop at step 8 inside pretraining's hand-over (pretrain 5) and exactly at it (8): the

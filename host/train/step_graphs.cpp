@@ -116,9 +116,6 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   // motion on the device: the step needs nothing back from it).
   Tensor warp;
   if (uses_object_samples(c, geo, K)) {
-    if (static_cast<size_t>(K) > kMaxWarpObjects)
-      throw Error("option 'object-samples': samples crowd about at most " + std::to_string(kMaxWarpObjects) +
-                  " objects, the scene has " + std::to_string(K) + " (pass --object-samples 0)");
     s->motion = motion_parameter(g, K, motion_options(geo).frames);
     Tensor radius = g.parameter(kObjectRadiusName, Shape{static_cast<size_t>(K)}, Init::zeros());
     warp = object_sample_warp(s->motion, radius, s->times, motion_options(geo),

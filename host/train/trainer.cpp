@@ -41,6 +41,11 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
     throw Error("--rays " + std::to_string(config_.rays) + " cannot be split evenly over " + std::to_string(ranks()) +
                 " ranks");
   if (scene.frames.empty()) throw Error("scene '" + scene.source + "' has no frames");
+  if (uses_object_samples(config_, geometry_, geometry_.num_objects) &&
+      static_cast<size_t>(geometry_.num_objects) > kMaxWarpObjects)
+    throw Error("option 'object-samples': samples crowd about at most " + std::to_string(kMaxWarpObjects) +
+                " objects, scene '" + scene.source + "' has " + std::to_string(geometry_.num_objects) +
+                " (pass --object-samples 0)");
   std::error_code ec;
   fs::create_directories(run_.dir(), ec);
   if (ec) throw Error("cannot create run folder '" + run_.dir() + "': " + ec.message());
