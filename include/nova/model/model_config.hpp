@@ -12,7 +12,7 @@ namespace nova {
 struct ModelConfig {
   FieldConfig field;
   int samples = 64;  // stratified samples per ray
-  // Of those, how many crowd into the rigid objects' boxes (object_samples.hpp): the rest
+  // Of those, how many crowd about where the rigid objects stand (object_samples.hpp): the rest
   // stay evenly spread. 0: all evenly spread.
   int object_samples = 0;
   // Empty-space skipping (occupancy.hpp): whether the model has occupancy grids, and the

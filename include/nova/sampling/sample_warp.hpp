@@ -1,7 +1,7 @@
 #pragma once
-// Where a ray's samples go when part of them should crowd into a few depth ranges (the moving
-// objects' boxes): a piecewise-linear warp of the stratified depths, the same for every ray of
-// a view, that stratified_samples applies (rays.hpp). Depths are fractions of the sampled
+// Where a ray's samples go when part of them should crowd into a few depth ranges (where the
+// moving objects stand): a piecewise-linear warp of the stratified depths, the same for every
+// ray of a view, that stratified_samples applies (rays.hpp). Depths are fractions of the sampled
 // range [near, far] (NDC t for forward-facing scenes, where a depth range is the same t-range
 // on every ray).
 //
