@@ -238,16 +238,17 @@ __kernel void motion_smoothness_backward(__global const float* motion, __global 
 // b's pivot is at its motion's translation tau(times[b]) (the motion maps tau to the pivot),
 // and its range is the depth fractions t = 1 + near / z of world z within reach * radius[b]
 // of tau's. Then the knots (u, t) of the mixture (1 - share) even + share split evenly over
-// the ranges. One work-item (K <= kMaxWarpObjects: a few hundred numbers). As sample_warp and
-// depth_interval on the host.
+// the ranges; a range narrower than min_interval widened about its middle to it. One
+// work-item (K <= kMaxWarpObjects, sample_warp.hpp's bound: a few hundred numbers). As
+// sample_warp and depth_interval on the host.
 #define kMaxWarpObjects 64
-#define kMinWarpInterval 1e-3f
 
 inline float depth_fraction(float z, float near) { return z < -near ? 1.0f + near / z : 0.0f; }
 
 __kernel void object_sample_warp(__global const float* motion, __global const float* radius,
                                  __global const float* times, __global float* warp, uint K,
-                                 uint frames, float near, float share, float reach) {
+                                 uint frames, float near, float share, float reach,
+                                 float min_interval) {
   if (get_global_id(0) != 0) return;
   float lo[kMaxWarpObjects], hi[kMaxWarpObjects];
   uint kept = 0;
@@ -259,10 +260,10 @@ __kernel void object_sample_warp(__global const float* motion, __global const fl
     const float r = reach * radius[b];
     float l = depth_fraction(m[5] + r, near), h = depth_fraction(m[5] - r, near);
     if (!(h > l)) continue;
-    if (h - l < kMinWarpInterval) {
+    if (h - l < min_interval) {
       const float mid = 0.5f * (l + h);
-      l = mid - 0.5f * kMinWarpInterval;
-      h = mid + 0.5f * kMinWarpInterval;
+      l = mid - 0.5f * min_interval;
+      h = mid + 0.5f * min_interval;
     }
     l = fmax(l, 0.0f);
     h = fmin(h, 1.0f);

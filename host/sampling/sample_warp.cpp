@@ -18,7 +18,7 @@ class ObjectSampleWarpOp final : public Op {
     ctx.launch("rigid_motion", "object_sample_warp")
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.out(0))
         .arg(detail::u32(objects_, "objects")).arg(static_cast<unsigned>(o_.frames))
-        .arg(o_.ndc_near).arg(share_).arg(reach_)
+        .arg(o_.ndc_near).arg(share_).arg(reach_).arg(static_cast<float>(kMinWarpInterval))
         .run(1);
   }
   // Where samples go is data: the warp takes no gradient, and sends none to the motion.
@@ -72,7 +72,7 @@ std::vector<float> sample_warp(const std::vector<DepthInterval>& intervals, doub
     knots.push_back(static_cast<float>(cdf[b] / cdf.back()));
     knots.push_back(static_cast<float>(bounds[b]));
   }
-  knots[knots.size() - 2] = 1.0f;  // the sums end at 1 up to rounding; the warp must
+  knots[knots.size() - 2] = 1.0f;  // exactly: the sums reach 1 only up to rounding
   while (knots.size() < W * 2) {
     knots.push_back(1.0f);
     knots.push_back(1.0f);

@@ -215,7 +215,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
   // Per object, the anchor of every frame that shows it; frames without one take their
   // neighbours' (linear between, the nearest beyond).
   std::vector<float> rows(static_cast<size_t>(K) * F * 6, 0.0f), boxes(static_cast<size_t>(K) * 6, 0.0f);
-  std::vector<float> radii(static_cast<size_t>(K), 0.0f);
+  std::vector<float> object_radii(static_cast<size_t>(K), 0.0f);
   for (int k = 1; k <= K; ++k) {
     double radius = 0;  // world units, the largest over the frames
     std::vector<std::optional<Vec3>> anchor(static_cast<size_t>(F));
@@ -321,9 +321,9 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
     }
     const std::array<float, 6> box = object_box_row(motion_pivot(r, F), kObjectBoxRadii * radius, geo);
     std::copy(box.begin(), box.end(), boxes.begin() + static_cast<long>(k - 1) * 6);
-    radii[static_cast<size_t>(k - 1)] = static_cast<float>(radius);
+    object_radii[static_cast<size_t>(k - 1)] = static_cast<float>(radius);
   }
-  return {rows, boxes, radii};
+  return {rows, boxes, object_radii};
 }
 
 }  // namespace nova

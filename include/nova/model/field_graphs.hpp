@@ -64,7 +64,7 @@ struct ViewGraph {
   // cameras: [N, 16], the view's camera N times; times [instances, 1]
   Tensor pixels, cameras, transforms, times;
   // With `warped`: where the samples crowd, [sample_warp_knots(instances), 2] knots
-  // (object_sample_warp in object_samples.hpp, from the instances' boxes and transforms).
+  // (object_sample_warp in object_samples.hpp, from the instances' pivots and radii).
   Tensor warp;
   RenderOutputs out;
   // With `packed`: the packing of the static samples and of the instances' samples (set
