@@ -124,6 +124,29 @@ BOOST_AUTO_TEST_CASE(programs_are_cached_per_context) {
   BOOST_TEST(rt.work_group_size(a) <= rt.info().max_work_group_size);
 }
 
+// A launch of a few long work-items caps its groups (Launch::run's max_group) so that a CPU
+// device's threads share them: the group is as asked, and every item still runs once.
+BOOST_AUTO_TEST_CASE(a_capped_work_group_runs_every_item) {
+  Runtime& rt = test::runtime();
+  rt.record_launches(true);  // left on, as the op table's suite leaves it: records cost nothing else
+  const unsigned total = 37, cols = 3;
+  const std::vector<float> fill = {1.5f, -2.0f, 4.0f};
+  for (size_t cap : {size_t{0}, size_t{1}, size_t{4}}) {
+    Buffer dense = rt.upload_floats(std::vector<float>(total + 5, 0.0f));
+    Buffer f = rt.upload_floats(fill);
+    rt.launch("packing", "fill_rows").arg(dense).arg(f).arg(total).arg(cols).run(total, cap);
+    const std::vector<float> out = rt.download_floats(dense.get(), total + 5);
+    for (unsigned t = 0; t < total + 5; ++t) BOOST_TEST(out[t] == (t < total ? fill[t % cols] : 0.0f));
+    bool seen = false;
+    for (const LaunchRecord& r : rt.launches())
+      if (r.family == "packing" && r.name == "fill_rows" && r.size[0] == total) {
+        const size_t own = rt.work_group_size(rt.kernel("packing", "fill_rows"));
+        seen = seen || r.local[0] == (cap ? std::min(cap, own) : own);
+      }
+    BOOST_TEST(seen, "no launch of fill_rows with work-group " << cap);
+  }
+}
+
 BOOST_AUTO_TEST_CASE(build_failure_shows_the_compiler_log) {
   Runtime& rt = test::runtime();
   try {

@@ -277,9 +277,10 @@ Launch& Launch::local_floats(size_t n) {
   return *this;
 }
 
-void Launch::run(size_t n) {
+void Launch::run(size_t n, size_t max_group) {
   if (n == 0) return;
-  const size_t wg = rt_.work_group_size(kernel_);
+  const size_t own = rt_.work_group_size(kernel_);
+  const size_t wg = max_group ? std::min(max_group, own) : own;
   const size_t global = (n + wg - 1) / wg * wg;
   rt_.note_launch(kernel_, 1, &n, &wg);
   cl_check(clEnqueueNDRangeKernel(rt_.queue(), kernel_, 1, nullptr, &global, &wg, 0, nullptr,

@@ -51,7 +51,7 @@ class HashEncodingOp final : public Op {
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(ctx.in_rows(0, rows_), "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
         .arg(static_cast<int>(ctx.accumulate_in(1)))
-        .run(nets_ * c_.levels);
+        .run(nets_ * c_.levels, 1);  // one (network, level) per group: every CPU thread gets some
   }
 
   // The table gradient needs the positions only (the table is linear in the output); the

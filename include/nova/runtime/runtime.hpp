@@ -119,9 +119,11 @@ class Launch {
   Launch& arg(unsigned v);
   Launch& arg(const cl_float4& v);
   Launch& local_floats(size_t n);  // __local float[n]
-  // 1D over n items; the work-group size comes from the device and kernel, the global size
-  // is rounded up, and kernels guard with their own count.
-  void run(size_t n);
+  // 1D over n items; the work-group size comes from the device and kernel (capped at
+  // `max_group` when given), the global size is rounded up, and kernels guard with their own
+  // count. A CPU device runs each work-group on one thread: a kernel of a few long
+  // work-items (a serial loop each) caps its group at 1 so that the threads share them.
+  void run(size_t n, size_t max_group = 0);
   // 2D over (n0, n1), dimension 0 fastest. `max_group` caps the work-group (0: the kernel's
   // own limit) and `max0` its extent along dimension 0 (0: no cap), e.g. to leave a CPU
   // device many groups to share among its threads.
