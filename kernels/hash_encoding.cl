@@ -160,10 +160,40 @@ __kernel void hashgrid_backward(__global const float* restrict positions,
   }
 }
 
-// d positions (a moved object's samples: rigid_motion): one work-item per (network, row),
-// every level in order. The derivative of a vertex weight along dimension d is the product
-// of the other dimensions' weights, signed by the vertex's side, times the cells per unit of
-// x; a coordinate clamped to the box (not extended) has none.
+// d positions (a moved object's samples: rigid_motion). The derivative of a vertex weight
+// along dimension d is the product of the other dimensions' weights, signed by the vertex's
+// side, times the cells per unit of x; a coordinate clamped to the box (not extended) has none.
+// hg_position_grad_level adds level l's part of point p's gradient to grad (t: the network's
+// table at level l, dy: the point's dout at level l).
+inline void hg_position_grad_level(__global const float* p, __global const float* t,
+                                   __global const float* dy, __constant float* res,
+                                   __constant float* res_t, uint l, uint table_size,
+                                   float4 inv_bound, float* grad) {
+  const float inv[4] = {inv_bound.x, inv_bound.y, inv_bound.z, inv_bound.w};
+  uint term[HG_DIMS][2];
+  float w1[HG_DIMS][2], frac[HG_DIMS], du[HG_DIMS];
+  const int dense = hg_level(p, res, res_t, l, table_size, inv_bound, term, w1, frac);
+  for (uint d = 0; d < HG_DIMS; ++d) {
+    const int is_t = (HG_DIMS == 4) ? (d == 3) : 0;
+    const int extend = HG_EXTEND ? ((dense | is_t) == 0) : 0;
+    const float u = 0.5f * (p[d] * inv[d] + 1.0f);
+    const int inside = extend ? (u > -1048576.0f && u < 1048576.0f) : (u > 0.0f && u < 1.0f);
+    du[d] = inside ? 0.5f * inv[d] * (is_t ? res_t[l] : res[l]) : 0.0f;
+  }
+  for (uint c = 0; c < HG_CORNERS; ++c) {
+    const uint index = hg_vertex(term, dense, table_size, c);
+    float dot = 0.0f;
+    for (uint f = 0; f < HG_FEATURES; ++f) dot += dy[f] * t[(size_t)index * HG_FEATURES + f];
+    for (uint d = 0; d < HG_DIMS; ++d) {
+      float w = ((c >> d) & 1u) ? 1.0f : -1.0f;
+      for (uint e = 0; e < HG_DIMS; ++e)
+        if (e != d) w *= w1[e][(c >> e) & 1u];
+      grad[d] += dot * w * du[d];
+    }
+  }
+}
+
+// One work-item per (network, row), every level in order (GPUs).
 __kernel void hashgrid_backward_positions(__global const float* restrict positions,
                                           __global const float* restrict table,
                                           __global const float* restrict dout,
@@ -173,37 +203,53 @@ __kernel void hashgrid_backward_positions(__global const float* restrict positio
   const uint i = get_global_id(0);
   if (i >= nets * rows) return;
   const uint b = i / rows;
-  const float inv[4] = {inv_bound.x, inv_bound.y, inv_bound.z, inv_bound.w};
-  __global const float* p = positions + (size_t)i * HG_DIMS;
   float grad[HG_DIMS];
   for (uint d = 0; d < HG_DIMS; ++d) grad[d] = 0.0f;
-  for (uint l = 0; l < levels; ++l) {
-    uint term[HG_DIMS][2];
-    float w1[HG_DIMS][2], frac[HG_DIMS], du[HG_DIMS];
-    const int dense = hg_level(p, res, res_t, l, table_size, inv_bound, term, w1, frac);
-    for (uint d = 0; d < HG_DIMS; ++d) {
-      const int is_t = (HG_DIMS == 4) ? (d == 3) : 0;
-      const int extend = HG_EXTEND ? ((dense | is_t) == 0) : 0;
-      const float u = 0.5f * (p[d] * inv[d] + 1.0f);
-      const int inside = extend ? (u > -1048576.0f && u < 1048576.0f) : (u > 0.0f && u < 1.0f);
-      du[d] = inside ? 0.5f * inv[d] * (is_t ? res_t[l] : res[l]) : 0.0f;
-    }
-    __global const float* t = table + ((size_t)b * levels + l) * table_size * HG_FEATURES;
-    __global const float* dy = dout + (size_t)i * levels * HG_FEATURES + l * HG_FEATURES;
-    for (uint c = 0; c < HG_CORNERS; ++c) {
-      const uint index = hg_vertex(term, dense, table_size, c);
-      float dot = 0.0f;
-      for (uint f = 0; f < HG_FEATURES; ++f) dot += dy[f] * t[(size_t)index * HG_FEATURES + f];
-      for (uint d = 0; d < HG_DIMS; ++d) {
-        float w = ((c >> d) & 1u) ? 1.0f : -1.0f;
-        for (uint e = 0; e < HG_DIMS; ++e)
-          if (e != d) w *= w1[e][(c >> e) & 1u];
-        grad[d] += dot * w * du[d];
-      }
-    }
-  }
+  for (uint l = 0; l < levels; ++l)
+    hg_position_grad_level(positions + (size_t)i * HG_DIMS,
+                           table + ((size_t)b * levels + l) * table_size * HG_FEATURES,
+                           dout + (size_t)i * levels * HG_FEATURES + l * HG_FEATURES, res, res_t, l,
+                           table_size, inv_bound, grad);
   __global float* o = dpositions + (size_t)i * HG_DIMS;
   for (uint d = 0; d < HG_DIMS; ++d) o[d] = accumulate ? o[d] + grad[d] : grad[d];
+}
+
+// The same in two passes (CPUs, with the ordered table backward): one work-item per
+// (network, level, row), rows fastest as in the forward, so that the items a CPU thread runs
+// in turn read one level's table (its cache holds one level's, not every level's), each
+// writing its level's part to partial [B, M, L, D]; then hashgrid_positions_sum adds a row's
+// levels in order.
+__kernel void hashgrid_backward_positions_levels(__global const float* restrict positions,
+                                                 __global const float* restrict table,
+                                                 __global const float* restrict dout,
+                                                 __constant float* res, __constant float* res_t,
+                                                 __global float* restrict partial, uint nets, uint rows,
+                                                 uint levels, uint table_size, float4 inv_bound) {
+  const uint i = get_global_id(0);
+  if (i >= nets * levels * rows) return;
+  const uint r = i % rows, l = (i / rows) % levels, b = i / (rows * levels);
+  const size_t row = (size_t)b * rows + r;
+  float grad[HG_DIMS];
+  for (uint d = 0; d < HG_DIMS; ++d) grad[d] = 0.0f;
+  hg_position_grad_level(positions + row * HG_DIMS, table + ((size_t)b * levels + l) * table_size * HG_FEATURES,
+                         dout + row * levels * HG_FEATURES + l * HG_FEATURES, res, res_t, l, table_size,
+                         inv_bound, grad);
+  __global float* o = partial + (row * levels + l) * HG_DIMS;
+  for (uint d = 0; d < HG_DIMS; ++d) o[d] = grad[d];
+}
+
+__kernel void hashgrid_positions_sum(__global const float* restrict partial,
+                                     __global float* restrict dpositions, uint points, uint levels,
+                                     int accumulate) {
+  const uint i = get_global_id(0);
+  if (i >= points) return;
+  __global const float* q = partial + (size_t)i * levels * HG_DIMS;
+  __global float* o = dpositions + (size_t)i * HG_DIMS;
+  for (uint d = 0; d < HG_DIMS; ++d) {
+    float s = 0.0f;
+    for (uint l = 0; l < levels; ++l) s += q[l * HG_DIMS + d];
+    o[d] = accumulate ? o[d] + s : s;
+  }
 }
 
 // ---- The parallel backward: fixed-point sums, exact in any order ---------------------------

@@ -2,6 +2,7 @@
 // crowds a step's samples into the moved objects' boxes (sample_warp.hpp), and the hash
 // encoding's gradient to its positions, which carries a moved object's loss to its motion.
 #include <cmath>
+#include <cstdlib>
 
 #include "hashgrid_reference.hpp"
 #include "nova/ops/encoding/hash_encoding.hpp"
@@ -178,8 +179,20 @@ OpEntry hash_positions_entry() {
   e.name = "hash_encoding_positions";
   OpShape tiny{{5, 3, 1}, 0, "5 x 3, coarse, h 1e-4"};
   tiny.fd = GradCheckOptions{1e-4f, 48, 5e-2};
+  // dims[3] = 1: the one-row-per-item kernel that goes with the atomic table backward (GPUs);
+  // otherwise the level-by-level pass and its sum (CPUs).
   e.shapes = {{{kOddRows, 3, 1}, 0, "1009 x 3, coarse"}, {{kOddRows, 3, 2}, 1, "2 x 1009 x 3, hashed"},
-              {{23, 4, 1}, 1, "23 x 4 (xyzt), hashed"}, {{1, 3, 1}, 0, "1 x 3"}, tiny};
+              {{23, 4, 1}, 1, "23 x 4 (xyzt), hashed"}, {{1, 3, 1}, 0, "1 x 3"}, tiny,
+              {{kOddRows, 3, 2, 1}, 1, "2 x 1009 x 3, hashed, per row"},
+              {{23, 4, 1, 1}, 1, "23 x 4 (xyzt), hashed, per row"}};
+  // The path follows NOVA_HASH_BACKWARD, read when the executor is built and when it runs.
+  e.prepare = [](const OpShape& s, const Runtime& rt) -> std::string {
+    const bool per_row = s.dims.size() > 3 && s.dims[3] == 1;
+    if (per_row && !rt.info().int64_atomics) return "the device has no cl_khr_int64_base_atomics";
+    setenv("NOVA_HASH_BACKWARD", per_row ? "atomic" : "ordered", 1);
+    return "";
+  };
+  e.restore = [] { unsetenv("NOVA_HASH_BACKWARD"); };
   e.build = [](Graph& g, const OpShape& s) {
     const size_t rows = s.dims[0], dims = s.dims[1], nets = s.dims[2];
     Tensor p = g.input("p", nets > 1 ? Shape{nets, rows, dims} : Shape{rows, dims}, true);
