@@ -70,7 +70,7 @@ class HashEncodingOp final : public Op {
       return;
     }
     upload_resolutions(ctx.rt);
-    if (parallel_backward(ctx.rt)) {  // a GPU: one row per work-item
+    if (parallel_backward(ctx.rt)) {  // the atomic path (GPUs): one row per work-item
       ctx.launch("hash_encoding", "hashgrid_backward_positions", build_options())
           .arg(ctx.in(0)).arg(ctx.in(1)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(dp)
           .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
@@ -79,9 +79,9 @@ class HashEncodingOp final : public Op {
           .run(nets_ * rows);
       return;
     }
-    // A CPU: level by level into the workspace, then each row's levels summed in order. One
-    // row's pass over every level's table (8 MB a network) ran 4.5 times slower per row and
-    // level than the forward, which reads one level's table at a time.
+    // The ordered path (CPUs): level by level into the workspace, then each row's levels
+    // summed in order. One row's pass over every level's table (8 MB a network) ran 4.5 times
+    // slower per row and level than the forward, which reads one level's table at a time.
     ctx.launch("hash_encoding", "hashgrid_backward_positions_levels", build_options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.workspace())
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
