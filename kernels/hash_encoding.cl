@@ -217,8 +217,8 @@ __kernel void hashgrid_backward_positions(__global const float* restrict positio
 // The same in two passes (CPUs, with the ordered table backward): one work-item per
 // (network, level, row), rows fastest as in the forward, so that the items a CPU thread runs
 // in turn read one level's table (its cache holds one level's, not every level's), each
-// writing its level's part to partial [B, M, L, D]; then hashgrid_positions_sum adds a row's
-// levels in order.
+// writing its level's part to partial [L, B, M, D]; reduce.cl's colsum_finish then adds a
+// row's levels in order.
 __kernel void hashgrid_backward_positions_levels(__global const float* restrict positions,
                                                  __global const float* restrict table,
                                                  __global const float* restrict dout,
@@ -234,22 +234,8 @@ __kernel void hashgrid_backward_positions_levels(__global const float* restrict 
   hg_position_grad_level(positions + row * HG_DIMS, table + ((size_t)b * levels + l) * table_size * HG_FEATURES,
                          dout + row * levels * HG_FEATURES + l * HG_FEATURES, res, res_t, l, table_size,
                          inv_bound, grad);
-  __global float* o = partial + (row * levels + l) * HG_DIMS;
+  __global float* o = partial + ((size_t)l * nets * rows + row) * HG_DIMS;
   for (uint d = 0; d < HG_DIMS; ++d) o[d] = grad[d];
-}
-
-__kernel void hashgrid_positions_sum(__global const float* restrict partial,
-                                     __global float* restrict dpositions, uint points, uint levels,
-                                     int accumulate) {
-  const uint i = get_global_id(0);
-  if (i >= points) return;
-  __global const float* q = partial + (size_t)i * levels * HG_DIMS;
-  __global float* o = dpositions + (size_t)i * HG_DIMS;
-  for (uint d = 0; d < HG_DIMS; ++d) {
-    float s = 0.0f;
-    for (uint l = 0; l < levels; ++l) s += q[l * HG_DIMS + d];
-    o[d] = accumulate ? o[d] + s : s;
-  }
 }
 
 // ---- The parallel backward: fixed-point sums, exact in any order ---------------------------

@@ -79,18 +79,20 @@ class HashEncodingOp final : public Op {
           .run(nets_ * rows);
       return;
     }
-    // The ordered path (CPUs): level by level into the workspace, then each row's levels
-    // summed in order. One row's pass over every level's table (8 MB a network) ran 4.5 times
-    // slower per row and level than the forward, which reads one level's table at a time.
+    // The ordered path (CPUs): level by level into the workspace ([levels, rows, dims]), then
+    // each row's levels summed in order as a column sum. One row's pass over every level's
+    // table (8 MB a network) ran 4.5 times slower per row and level than the forward, which
+    // reads one level's table at a time.
     ctx.launch("hash_encoding", "hashgrid_backward_positions_levels", build_options())
         .arg(ctx.in(0)).arg(ctx.in(1)).arg(dy).arg(res_buffer_).arg(res_t_buffer_).arg(ctx.workspace())
         .arg(detail::u32(nets_, "networks")).arg(detail::u32(rows, "rows"))
         .arg(static_cast<unsigned>(c_.levels)).arg(table_size()).arg(inv_bound())
         .run(nets_ * rows * c_.levels);
-    ctx.launch("hash_encoding", "hashgrid_positions_sum", build_options())
-        .arg(ctx.workspace()).arg(dp).arg(detail::u32(nets_ * rows, "points"))
+    const size_t cols = nets_ * rows * dims_;
+    ctx.launch("reduce", "colsum_finish")
+        .arg(ctx.workspace()).arg(dp).arg(detail::u32(cols, "position gradients"))
         .arg(static_cast<unsigned>(c_.levels)).arg(static_cast<int>(ctx.accumulate_in(0)))
-        .run(nets_ * rows);
+        .run(cols);
   }
 
   // The atomic backward's fixed-point table (a GPU), or the per-level parts of the positions'
