@@ -128,6 +128,11 @@ OpEntry bias_act_entry() {
       e.shapes.push_back({{13, 7, 1, size_t(walk)}, a, std::string(activation_name(kActivations[a])) + ", 13 x 7" + name});
     }
   }
+  // Over 4159 rows the strided gradient takes more parts than the row walk and folds them
+  // (reduce.cl's colsum_fold): 9001 rows give 140 parts, folded into 5.
+  OpShape many_parts{{9001, 5, 1, 1}, 1, "relu, 9001 x 5, strided, folded parts"};
+  many_parts.no_fd = true;
+  e.shapes.push_back(many_parts);
   e.build = [](Graph& g, const OpShape& s) {
     const size_t rows = s.dims[0], cols = s.dims[1], batch = s.dims[2];
     Tensor h = g.input("h", batched(batch, rows, cols), true);

@@ -90,7 +90,7 @@ class HashEncodingOp final : public Op {
         .run(nets_ * rows * c_.levels);
     const size_t cols = nets_ * rows * dims_;
     ctx.launch("reduce", "colsum_finish")
-        .arg(ctx.workspace()).arg(dp).arg(detail::u32(cols, "position gradients"))
+        .arg(ctx.workspace()).arg(0u).arg(dp).arg(detail::u32(cols, "position gradients"))
         .arg(static_cast<unsigned>(c_.levels)).arg(static_cast<int>(ctx.accumulate_in(0)))
         .run(cols);
   }

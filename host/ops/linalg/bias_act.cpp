@@ -13,7 +13,7 @@ std::string activation_options(Activation act) {
 
 namespace detail {
 
-void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts, cl_mem y,
+void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t capacity, cl_mem y,
                        cl_mem dy, cl_mem dh, bool acc_dh, cl_mem db, bool acc_db,
                        cl_mem partials) {
   const std::string options = activation_options(act);
@@ -21,6 +21,7 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
   // CPUs: one in-order pass writes the partial sums (bit for bit bias_grad_partial's) and dh.
   const BiasGradWalk walk = db ? bias_grad_walk(ctx.rt.info()) : BiasGradWalk::Strided;
   const bool row_walk = walk != BiasGradWalk::Strided;
+  const size_t parts = bias_grad_parts(walk, capacity), folds = bias_grad_folds(parts);
   if (walk == BiasGradWalk::Host && (act == Activation::Identity || act == Activation::ReLU)) {
     bias_grad_rows_host(ctx.rt, s, act, parts, y, dy, partials, dh, acc_dh);
   } else if (row_walk) {
@@ -37,11 +38,20 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts
         .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
         .run2(bc, parts);
   }
-  if (db)
+  if (db) {
+    size_t first = 0, last_parts = parts;
+    if (folds > 0) {  // many parts (a GPU's strided walk): add them kFoldParts at a time first
+      ctx.launch("reduce", "colsum_fold")
+          .arg(partials).arg(u32(bc, "batch cols")).arg(u32(parts, "parts")).arg(u32(kFoldParts, "fold"))
+          .run2(bc, folds);
+      first = parts * bc;
+      last_parts = folds;
+    }
     ctx.launch("reduce", "colsum_finish")
-        .arg(partials).arg(db).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
-        .arg(static_cast<int>(acc_db))
+        .arg(partials).arg(u32(first, "first partial")).arg(db).arg(u32(bc, "batch cols"))
+        .arg(u32(last_parts, "parts")).arg(static_cast<int>(acc_db))
         .run(bc);
+  }
   if (dh && n > 0 && !row_walk)
     ctx.launch("bias_act", "bias_act_backward", options)
         .arg(y).arg(dy).arg(dh).arg(u32(n, "bias_act size")).arg(static_cast<int>(acc_dh))
@@ -65,8 +75,6 @@ class BiasActOp final : public Op {
   BiasActOp(detail::Matrix3 s, Activation act) : s_(s), act_(act) {}
   std::string type() const override { return std::string("bias_") + activation_name(act_); }
 
-  size_t parts() const { return detail::bias_grad_parts(s_.rows); }
-
   void forward(ExecContext& ctx) override {
     detail::bias_act_forward(ctx.rt, {s_.batch, ctx.in_rows(0, s_.rows), s_.cols}, act_, ctx.in(0), ctx.in(1),
                              ctx.out(0));
@@ -76,7 +84,7 @@ class BiasActOp final : public Op {
     cl_mem dy = ctx.grad_out(0);
     if (!dy) return;
     const detail::Matrix3 live{s_.batch, ctx.in_rows(0, s_.rows), s_.cols};
-    detail::bias_act_backward(ctx, live, act_, parts(), ctx.out(0), dy, ctx.grad_in(0),
+    detail::bias_act_backward(ctx, live, act_, s_.rows, ctx.out(0), dy, ctx.grad_in(0),
                               ctx.accumulate_in(0), ctx.grad_in(1), ctx.accumulate_in(1),
                               ctx.workspace());
   }
@@ -86,7 +94,7 @@ class BiasActOp final : public Op {
 
   size_t workspace_bytes(Runtime&, Pass pass) const override {
     if (pass == Pass::Forward) return 0;
-    return parts() * s_.batch * s_.cols * sizeof(float);
+    return detail::bias_grad_workspace_floats(s_.rows, s_.batch * s_.cols) * sizeof(float);
   }
 
  private:

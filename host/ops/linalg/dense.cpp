@@ -31,7 +31,7 @@ class DenseOp final : public Op {
     const size_t m = ctx.in_rows(0, m_);
     cl_mem dx = ctx.grad_in(0), dw = ctx.grad_in(1);
     const bool wants_dh = (dx || dw) && act_ != Activation::Identity;
-    detail::bias_act_backward(ctx, {s_.batch, m, s_.n}, act_, detail::bias_grad_parts(m_),
+    detail::bias_act_backward(ctx, {s_.batch, m, s_.n}, act_, m_,
                               ctx.out(0), dy, wants_dh ? dy : nullptr, false, ctx.grad_in(2),
                               ctx.accumulate_in(2), ctx.workspace());
     s_.backward(ctx.rt, ctx.in(0), ctx.in(1), dy, dx, ctx.accumulate_in(0), dw,
@@ -46,7 +46,7 @@ class DenseOp final : public Op {
   size_t workspace_bytes(Runtime& rt, Pass pass) const override {
     if (pass == Pass::Forward)
       return gemm_temp_bytes(rt, s_.forward(nullptr, nullptr, nullptr, m_));
-    return std::max(detail::bias_grad_parts(m_) * s_.batch * s_.n * sizeof(float),
+    return std::max(detail::bias_grad_workspace_floats(m_, s_.batch * s_.n) * sizeof(float),
                     s_.backward_bytes(rt, m_));
   }
 

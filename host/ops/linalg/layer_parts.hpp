@@ -6,6 +6,7 @@
 #include "nova/graph/executor.hpp"
 #include "nova/ops/linalg/dense.hpp"
 #include "nova/ops/linalg/gemm.hpp"
+#include "nova/tuning/tuning.hpp"
 #include "ops/tensor/op_util.hpp"
 
 namespace nova::detail {
@@ -35,9 +36,28 @@ struct LinearShape {
   size_t backward_bytes(Runtime& rt, size_t m) const;
 };
 
-// Row parts of bias_act's two-stage bias gradient for a tensor of `rows` rows (at capacity).
-inline size_t bias_grad_parts(size_t rows) {
-  return std::min<size_t>(64, std::max<size_t>(1, rows / 64));
+// The bias gradient's first stage sums each column's rows in `parts` interleaved parts (row r
+// into part r % parts), about 64 rows a part. A walk in row order (CPUs: bias_grad_rows keeps
+// the parts in registers) takes at most 64; the strided kernel (GPUs: one work-item per
+// column and part) up to 1024, so that a few columns still give the GPU work-items enough to
+// fill it. Up to 4159 rows both take the same parts, and the same sums bit for bit.
+constexpr size_t kRowWalkMaxParts = 64;
+constexpr size_t kStridedMaxParts = 1024;
+inline size_t bias_grad_parts(BiasGradWalk walk, size_t rows) {
+  const size_t cap = walk == BiasGradWalk::Strided ? kStridedMaxParts : kRowWalkMaxParts;
+  return std::min<size_t>(cap, std::max<size_t>(1, rows / 64));
+}
+// Over kRowWalkMaxParts parts, a middle stage adds them kFoldParts at a time (colsum_fold), so
+// that the last stage's work-items, one per column, add at most 32 values each.
+constexpr size_t kFoldParts = 32;
+inline size_t bias_grad_folds(size_t parts) {
+  return parts > kRowWalkMaxParts ? (parts + kFoldParts - 1) / kFoldParts : 0;
+}
+// Scratch floats of bias_act's backward at `rows` rows (at capacity) of `batch_cols` columns,
+// whichever walk runs (NOVA_BIAS_GRAD is read when the op runs).
+inline size_t bias_grad_workspace_floats(size_t rows, size_t batch_cols) {
+  const size_t parts = bias_grad_parts(BiasGradWalk::Strided, rows);
+  return (parts + bias_grad_folds(parts)) * batch_cols;
 }
 
 // Columns per work-item of bias_grad_rows (one float8): a 256-wide layer gives 32 work-items,
@@ -47,12 +67,14 @@ constexpr size_t kRowWalkColumns = 8;
 // y = act(h + b) over s (s.rows: the rows in use), b one row per batch; y may be h itself.
 void bias_act_forward(Runtime& rt, Matrix3 s, Activation act, cl_mem h, cl_mem b, cl_mem y);
 
-// bias_act's backward over s (s.rows: the rows in use) from y = act(h + b) and dy: first
-// db (+)= column sums of dy act'(y) (two stages through `partials`, parts x batch x cols
-// floats), then dh (+)= dy act'(y). Either output may be null. dh may be dy itself (overwritten
-// in place): db reads dy before. Where bias_grad_walk says Rows or Host both are done in one
-// pass in row order (bias_grad_rows, or bias_grad_rows_host), with the same values bit for bit.
-void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t parts, cl_mem y,
+// bias_act's backward over s (s.rows: the rows in use; capacity: the rows the op was built
+// for, which fix the parts) from y = act(h + b) and dy: first db (+)= column sums of
+// dy act'(y) (in stages through `partials`, bias_grad_workspace_floats(capacity, batch x cols)
+// floats), then dh (+)= dy act'(y). Either output may be null. dh may be dy itself
+// (overwritten in place): db reads dy before. Where bias_grad_walk says Rows or Host both are
+// done in one pass in row order (bias_grad_rows, or bias_grad_rows_host), with the values of
+// the strided kernel at the same parts bit for bit.
+void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t capacity, cl_mem y,
                        cl_mem dy, cl_mem dh, bool acc_dh, cl_mem db, bool acc_db,
                        cl_mem partials);
 
