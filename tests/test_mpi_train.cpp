@@ -1,5 +1,6 @@
-// `mpirun -np 2 nova train` on two PoCL devices (POCL_DEVICES="pthread pthread") against one
-// process on the same global batch: the same losses at every logged step, one run folder
+// `mpirun -np 2 nova train` on two PoCL devices (POCL_DEVICES="pthread pthread", NOVA_DEVICE=cpu:
+// the ranks deal out the CPU devices, also where a GPU would be theirs) against one process on
+// the same device type and global batch: the same losses at every logged step, one run folder
 // written by rank 0 alone (one metrics line per step); and `mpirun -np 2 nova eval` and
 // `nova render` of that run against one process. Reported as skipped where nova was built
 // without MPI.
@@ -54,13 +55,26 @@ const std::string kDefaultTerms =
     " --preset quick --log-every 1 --rays 128 --samples 16 --hash-log2-size 12 --hash-levels 8 --augment-start 0";
 const std::string kOptions = kDefaultTerms + " --pretrain-steps 10 --steps 10 --w-depth 0 --w-free-space 0 --w-sparsity 0";
 
+// Every process on a CPU device, so that one process and two ranks compare PoCL with PoCL on
+// machines with a GPU too.
+const std::string kOnCpu = "NOVA_DEVICE=cpu";
+
 #ifdef NOVA_MPIEXEC
 // `nova ARGS` as two ranks on two PoCL devices (as root too: CI's containers run as root).
 CommandResult two_ranks(const std::string& args, const TempDir& dir) {
   return run_built("nova", args, dir,
-                   "POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
-                       std::string(NOVA_MPIEXEC) + " -np 2 --oversubscribe -x POCL_DEVICES -x POCL_CACHE_DIR " +
+                   kOnCpu + " POCL_DEVICES='pthread pthread' OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
+                       std::string(NOVA_MPIEXEC) + " -np 2 --oversubscribe -x NOVA_DEVICE -x POCL_DEVICES -x POCL_CACHE_DIR " +
                        "-x POCL_MAX_PTHREAD_COUNT -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM");
+}
+
+// The device id ("P:D") that `nova train` printed for rank `rank` of 2, or "" if none.
+std::string rank_device_id(const std::string& err, int rank) {
+  const std::string tag = "rank " + std::to_string(rank) + " of 2 on ";
+  const size_t at = err.find(tag);
+  if (at == std::string::npos) return "";
+  const size_t from = at + tag.size();
+  return err.substr(from, err.find(' ', from) - from);
 }
 #endif
 
@@ -73,12 +87,13 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   TempDir dir("mpi-train");
   // Frames held out, so that nova eval has views with masks (object and background scores).
   const std::string scene = " --scene " + cached_tiny_scene().string() + " --holdout 4";
-  const CommandResult one = run_built("nova", "train --out " + (dir / "one").string() + scene + kOptions, dir);
+  const CommandResult one = run_built("nova", "train --out " + (dir / "one").string() + scene + kOptions, dir, kOnCpu);
   BOOST_TEST_REQUIRE(one.code == 0, one.err);
   const auto two_ranks = [&](const std::string& args) { return nova::test::two_ranks(args, dir); };
   const CommandResult two = two_ranks("train --out " + (dir / "two").string() + scene + kOptions);
   BOOST_TEST_REQUIRE(two.code == 0, two.err);
-  BOOST_TEST(two.err.find("rank 1 of 2 on 0:1") != std::string::npos, two.err);
+  const std::string d0 = rank_device_id(two.err, 0), d1 = rank_device_id(two.err, 1);
+  BOOST_TEST((!d0.empty() && !d1.empty() && d0 != d1), "two ranks, two devices: " << two.err);
   const auto a = losses(dir / "one" / "metrics.jsonl"), b = losses(dir / "two" / "metrics.jsonl");
   BOOST_REQUIRE(a.size() == 20u);
   BOOST_REQUIRE(b.size() == 20u);  // rank 0 alone wrote the metrics
@@ -91,7 +106,7 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   // same table as one process, to float32's 6 digits.
   fs::copy(dir / "two", dir / "eval_one", fs::copy_options::recursive);
   fs::copy(dir / "two", dir / "eval_two", fs::copy_options::recursive);
-  const CommandResult e1 = run_built("nova", "eval --run " + (dir / "eval_one").string(), dir);
+  const CommandResult e1 = run_built("nova", "eval --run " + (dir / "eval_one").string(), dir, kOnCpu);
   BOOST_TEST_REQUIRE(e1.code == 0, e1.err);
   const CommandResult e2 = two_ranks("eval --run " + (dir / "eval_two").string());
   BOOST_TEST_REQUIRE(e2.code == 0, e2.err);
@@ -105,7 +120,7 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   BOOST_TEST(std::fabs(m1 - m2) <= 1e-4 * m1, m1 << " against " << m2);
   // The held-out views, frames with masks among cameras without: the region scores (NaN where
   // a view has none) are gathered too.
-  const CommandResult h1 = run_built("nova", "eval --views heldout --run " + (dir / "eval_one").string(), dir);
+  const CommandResult h1 = run_built("nova", "eval --views heldout --run " + (dir / "eval_one").string(), dir, kOnCpu);
   BOOST_TEST_REQUIRE(h1.code == 0, h1.err);
   const CommandResult h2 = two_ranks("eval --views heldout --run " + (dir / "eval_two").string());
   BOOST_TEST_REQUIRE(h2.code == 0, h2.err);
@@ -118,7 +133,7 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
   // nova render deals the frames out and rank 0 commits one folder: the same files, byte for
   // byte (every rank renders on the same kind of device).
   const std::string render = "render --run " + (dir / "two").string() + " --out ";
-  const CommandResult r1 = run_built("nova", render + (dir / "render_one").string(), dir);
+  const CommandResult r1 = run_built("nova", render + (dir / "render_one").string(), dir, kOnCpu);
   BOOST_TEST_REQUIRE(r1.code == 0, r1.err);
   const CommandResult r2 = two_ranks(render + (dir / "render_two").string());
   BOOST_TEST_REQUIRE(r2.code == 0, r2.err);
@@ -137,7 +152,7 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one_with_every_default_term, *boost::uni
 #ifdef NOVA_MPIEXEC
   TempDir dir("mpi-train-default");
   const std::string args = " --scene " + cached_tiny_scene().string() + kDefaultTerms + " --pretrain-steps 4 --steps 6";
-  const CommandResult one = run_built("nova", "train --out " + (dir / "one").string() + args, dir);
+  const CommandResult one = run_built("nova", "train --out " + (dir / "one").string() + args, dir, kOnCpu);
   BOOST_TEST_REQUIRE(one.code == 0, one.err);
   const CommandResult two = two_ranks("train --out " + (dir / "two").string() + args, dir);
   BOOST_TEST_REQUIRE(two.code == 0, two.err);
@@ -176,9 +191,9 @@ BOOST_AUTO_TEST_CASE(a_rank_that_stops_answering_ends_the_job, *boost::unit_test
       << "echo $code $(( ($(date +%s%N) - start) / 1000000 ))\n";
   }
   const std::string cmd =
-      "cd " + (dir / "").string() + " && POCL_DEVICES='pthread pthread' NOVA_MPI_TIMEOUT=3 OMPI_ALLOW_RUN_AS_ROOT=1 "
+      "cd " + (dir / "").string() + " && " + kOnCpu + " POCL_DEVICES='pthread pthread' NOVA_MPI_TIMEOUT=3 OMPI_ALLOW_RUN_AS_ROOT=1 "
       "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 bash " + script.string() + " " + NOVA_MPIEXEC +
-      " -np 2 --oversubscribe -x POCL_DEVICES -x POCL_CACHE_DIR -x POCL_MAX_PTHREAD_COUNT -x NOVA_MPI_TIMEOUT"
+      " -np 2 --oversubscribe -x NOVA_DEVICE -x POCL_DEVICES -x POCL_CACHE_DIR -x POCL_MAX_PTHREAD_COUNT -x NOVA_MPI_TIMEOUT"
       " -x OMPI_ALLOW_RUN_AS_ROOT -x OMPI_ALLOW_RUN_AS_ROOT_CONFIRM " + NOVA_BINARY_DIR + "/nova train --out " +
       run.string() + " --scene " + cached_tiny_scene().string() + options + " > " +
       (dir / "result.txt").string();

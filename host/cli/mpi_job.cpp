@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -223,12 +224,18 @@ double training_wait_limit() {
 
 DeviceInfo rank_device(const std::string& selector) {
   const char* env = std::getenv("NOVA_DEVICE");
-  if (!selector.empty() || (env && *env)) return select_device(selector);
+  const std::string chosen = !selector.empty() ? selector : (env ? env : "");
+  std::string type = chosen;
+  std::transform(type.begin(), type.end(), type.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (!chosen.empty() && type != "cpu" && type != "gpu") return select_device(chosen);
   const int local = env_int("OMPI_COMM_WORLD_LOCAL_RANK", env_int("MPI_LOCALRANKID", env_int("SLURM_LOCALID", 0)));
   std::vector<DeviceInfo> gpus, cpus;
-  for (const DeviceInfo& d : list_devices()) ((d.type & CL_DEVICE_TYPE_GPU) ? gpus : cpus).push_back(d);
-  const std::vector<DeviceInfo>& pool = gpus.empty() ? cpus : gpus;
-  if (pool.empty()) return select_device(selector);  // the usual error: no device
+  for (const DeviceInfo& d : list_devices()) {
+    if (d.type & CL_DEVICE_TYPE_GPU) gpus.push_back(d);
+    else if (type != "cpu" || (d.type & CL_DEVICE_TYPE_CPU)) cpus.push_back(d);
+  }
+  const std::vector<DeviceInfo>& pool = type == "cpu" ? cpus : type == "gpu" ? gpus : gpus.empty() ? cpus : gpus;
+  if (pool.empty()) return select_device(chosen);  // the usual error: no device (of that type)
   return pool[static_cast<size_t>(local) % pool.size()];
 }
 

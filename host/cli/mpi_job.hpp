@@ -40,8 +40,10 @@ int run_as_ranks(const char* command, const std::vector<std::string>& args,
 // (exit 2) naming the variable when it is not a number >= 0.
 double training_wait_limit();
 
-// The device of this rank when none is chosen (--device, NOVA_DEVICE): the node-local rank's
-// GPU, else its CPU device, counting the node's devices of that type round-robin.
+// The device of this rank: the node-local rank's GPU, else its CPU device, counting the
+// node's devices of that type round-robin; `selector` (--device, else NOVA_DEVICE) "cpu" or
+// "gpu" deals out the devices of that type alike, any other selector names one device for
+// every rank.
 DeviceInfo rank_device(const std::string& selector);
 
 }  // namespace nova::cli
