@@ -7,6 +7,8 @@
 #   mlp.txt       nova-bench mlp, GEMMs as chosen (tuned: split-K weight gradient) and CLBlast
 #                 unsplit, beside PyTorch on the same GPU where python3 has CUDA torch
 #   step.txt      nova-bench step: quick and reference, 1 and 2 objects, default synthetic scene
+#   anchor.txt    with NOVA_GPU_ANCHOR=DIR: nova-bench step --anchor DIR (nova's reference steps
+#                 and the NOVA code's, alternating on this GPU, and their ratio)
 #   main.txt      the main job (nova synth, train --preset quick, eval), with its times
 #   eval/         its camera-0 and composition pictures
 #   render.txt    nova-bench render  ops.txt     nova-bench ops (every op at its table shape)
@@ -61,7 +63,7 @@ if ! skip mlp; then
   torch=off
   python3 -c 'import torch, sys; sys.exit(0 if torch.cuda.is_available() else 1)' 2>/dev/null && torch=$(command -v python3)
   timeout "${NOVA_GPU_MLP_S:-150}" "$BUILD/nova-bench" mlp --batches "${NOVA_GPU_MLP_BATCHES:-16384,65536,262144}" --repeats 5 \
-    --gemm tuned,clblast --torch "$torch" --torch-device cuda >"$OUT_DIR/mlp.txt" 2>&1
+    --gemm "${NOVA_GPU_MLP_GEMM:-tuned,clblast}" --torch "$torch" --torch-device cuda >"$OUT_DIR/mlp.txt" 2>&1
   echo "exit $?" >>"$OUT_DIR/mlp.txt"
   sed -n '1,/^CSV$/p' "$OUT_DIR/mlp.txt" | head -80
 fi
@@ -91,6 +93,16 @@ if ! skip step; then
     --objects 1,2 --steps 10 --warmup 3 --torch off >"$OUT_DIR/step.txt" 2>&1
   echo "exit $?" >>"$OUT_DIR/step.txt"
   grep -vE "^ +[a-z_]+ +[0-9]" "$OUT_DIR/step.txt" | head -40
+fi
+
+# With NOVA_GPU_ANCHOR=DIR (the NOVA code anchor, nova_ref, carried along): nova's reference
+# steps and the NOVA code's on Balloon1 480x270, alternating on this GPU, and their ratio.
+if [ -n "${NOVA_GPU_ANCHOR:-}" ] && ! skip anchor; then
+  stage "nova-bench step beside the NOVA code"
+  timeout "${NOVA_GPU_ANCHOR_S:-240}" "$BUILD/nova-bench" step --anchor "$NOVA_GPU_ANCHOR" \
+    --anchor-python "$(command -v python3)" --steps 10 --warmup 3 --rounds "${NOVA_GPU_ANCHOR_ROUNDS:-2}" >"$OUT_DIR/anchor.txt" 2>&1
+  echo "exit $?" >>"$OUT_DIR/anchor.txt"
+  grep -vE "^ +[a-z_]+ +[0-9]" "$OUT_DIR/anchor.txt" | head -40
 fi
 
 if ! skip main; then
