@@ -1,11 +1,15 @@
 // align_object (motion_alignment.hpp) against the synthetic world's exact object poses, and
 // the Euler angles' round trip and continuity.
 #include <boost/test/unit_test.hpp>
+#include <atomic>
 #include <cmath>
+#include <stdexcept>
+#include <vector>
 
 #include "nova/data/llff_poses.hpp"
 #include "nova/data/synth.hpp"
 #include "nova/train/motion_alignment.hpp"
+#include "train/parallel_for.hpp"
 
 using namespace nova;
 
@@ -244,6 +248,24 @@ BOOST_AUTO_TEST_CASE(euler_angles_round_trip_and_stay_near) {
     BOOST_TEST(std::fabs(e[1] - previous[1]) + std::fabs(e[0] - previous[0]) + std::fabs(e[2] - previous[2]) < 0.1 + 1e-9);
     previous = e;
   }
+}
+
+// The host's parallel loop behind the tracks and the disparity fit: every index runs once
+// (more indices than threads, and none), and an exception thrown by one index reaches the
+// caller after every thread has stopped.
+BOOST_AUTO_TEST_CASE(parallel_for_runs_every_index_once_and_rethrows) {
+  for (size_t n : {size_t{0}, size_t{1}, size_t{7}, size_t{1000}}) {
+    std::vector<std::atomic<int>> runs(n);
+    detail::parallel_for(n, [&](size_t i) { ++runs[i]; });
+    for (size_t i = 0; i < n; ++i) BOOST_TEST(runs[i].load() == 1);
+  }
+  std::atomic<int> done{0};
+  BOOST_CHECK_THROW(detail::parallel_for(100, [&](size_t i) {
+                      if (i == 37) throw std::runtime_error("index 37");
+                      ++done;
+                    }),
+                    std::runtime_error);
+  BOOST_TEST(done.load() == 99);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

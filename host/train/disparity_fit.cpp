@@ -9,6 +9,7 @@
 
 #include "nova/sampling/camera.hpp"
 #include "train/float_plane.hpp"
+#include "train/parallel_for.hpp"
 
 namespace nova {
 namespace {
@@ -142,17 +143,24 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
   };
   constexpr int kGrid = 24;
   const double u0 = std::log(w_min), step = (std::log(w_max) - u0) / (kGrid - 1);
-  double best = 1e300, best_constant = 1e300, bu = u0, bv = u0;
+  std::vector<std::pair<int, int>> grid;
   for (int i = 0; i < kGrid; ++i)
-    for (int j = i; j < kGrid; ++j) {  // nearer where the disparity is larger
-      const double u = u0 + i * step, v = u0 + j * step, c = eval(u, v);
-      if (i == j) best_constant = std::min(best_constant, c);
-      if (c < best) {
-        best = c;
-        bu = u;
-        bv = v;
-      }
+    for (int j = i; j < kGrid; ++j) grid.push_back({i, j});  // nearer where the disparity is larger
+  std::vector<double> grid_cost(grid.size());
+  detail::parallel_for(grid.size(), [&](size_t g) {
+    grid_cost[g] = eval(u0 + grid[g].first * step, u0 + grid[g].second * step);
+  });
+  double best = 1e300, best_constant = 1e300, bu = u0, bv = u0;
+  for (size_t g = 0; g < grid.size(); ++g) {
+    const auto [i, j] = grid[g];
+    const double c = grid_cost[g];
+    if (i == j) best_constant = std::min(best_constant, c);
+    if (c < best) {
+      best = c;
+      bu = u0 + i * step;
+      bv = u0 + j * step;
     }
+  }
   // Pattern search from (u, v) with steps h0 / 2^k down to h0 / 32, on frame `only`'s samples
   // (all where < 0).
   auto refine = [&](double& u, double& v, double c0, double h0, int only) {

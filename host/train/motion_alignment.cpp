@@ -10,6 +10,7 @@
 
 #include "nova/runtime/error.hpp"
 #include "train/float_plane.hpp"
+#include "train/parallel_for.hpp"
 
 namespace nova {
 namespace {
@@ -281,6 +282,22 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& views, const std:
                                                   std::to_string(anchors.size()) + " anchors", kExitInternal);
   std::vector<Mat34> poses;
   poses.reserve(views.size());
+  if (options.window <= 1 && !views.empty()) {
+    // Each frame aligned to the one before alone: the pairs do not depend on each other's
+    // poses, so they run at once and the poses are chained after.
+    std::vector<Mat34> step(views.size(), kIdentity);
+    detail::parallel_for(views.size() - 1, [&](size_t p) {
+      const size_t j = p + 1;
+      Vec3 shift{};
+      for (int d = 0; d < 3; ++d) shift[static_cast<size_t>(d)] = anchors[j][static_cast<size_t>(d)] - anchors[j - 1][static_cast<size_t>(d)];
+      step[j] = align_object(std::vector<PlacedView>{{views[j - 1], kIdentity}}, views[j], shift, options).motion;
+    });
+    Mat34 first = kIdentity;
+    for (int d = 0; d < 3; ++d) first[static_cast<size_t>(d * 4 + 3)] = anchors[0][static_cast<size_t>(d)];
+    poses.push_back(first);
+    for (size_t j = 1; j < views.size(); ++j) poses.push_back(compose_rigid(step[j], poses[j - 1]));
+    return poses;
+  }
   for (size_t j = 0; j < views.size(); ++j) {
     if (j == 0) {
       Mat34 first = kIdentity;

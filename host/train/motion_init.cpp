@@ -20,6 +20,7 @@
 #include "nova/model/field_graphs.hpp"
 #include "nova/sampling/rays.hpp"
 #include "nova/train/step_graphs.hpp"
+#include "train/parallel_for.hpp"
 
 namespace nova {
 namespace {
@@ -216,7 +217,9 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
   // neighbours' (linear between, the nearest beyond).
   std::vector<float> rows(static_cast<size_t>(K) * F * 6, 0.0f), boxes(static_cast<size_t>(K) * 6, 0.0f);
   std::vector<float> object_radii(static_cast<size_t>(K), 0.0f);
-  for (int k = 1; k <= K; ++k) {
+  // The objects are independent: one track each, on the host's cores.
+  detail::parallel_for(static_cast<size_t>(K), [&](size_t object) {
+    const int k = static_cast<int>(object) + 1;
     double radius = 0;  // world units, the largest over the frames
     std::vector<std::optional<Vec3>> anchor(static_cast<size_t>(F));
     std::vector<size_t> frame_of(static_cast<size_t>(F));
@@ -257,7 +260,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
     std::vector<int> known;
     for (int i = 0; i < F; ++i)
       if (anchor[static_cast<size_t>(i)]) known.push_back(i);
-    if (known.empty()) continue;  // never seen: it stays at the origin
+    if (known.empty()) return;  // never seen: it stays at the origin
     // A mask that took in a piece of the background (a made mask where the object touches
     // something static) puts its median depth, and with it the anchor, far off the object's
     // path for that frame: such frames take their neighbours' rows, and neither the
@@ -322,7 +325,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
     const std::array<float, 6> box = object_box_row(motion_pivot(r, F), kObjectBoxRadii * radius, geo);
     std::copy(box.begin(), box.end(), boxes.begin() + static_cast<long>(k - 1) * 6);
     object_radii[static_cast<size_t>(k - 1)] = static_cast<float>(radius);
-  }
+  });
   return {rows, boxes, object_radii};
 }
 
