@@ -32,11 +32,47 @@ __kernel void sq_err_backward(__global const float* pred, __global const float* 
   grad[i] = accumulate ? grad[i] + g : g;
 }
 
-// out[0] (+)= w * x[0]: one term of a weighted sum of scalars.
-__kernel void scalar_axpy(__global const float* x, __global float* out, float w, int accumulate) {
+// A weighted sum of scalars, eight terms a launch (a step's loss has a dozen): out[0] (+)=
+// w0 x0[0] + w1 x1[0] + ... over the first n terms, added in order. Unused term arguments may
+// repeat a used buffer.
+__kernel void weighted_sum8(__global float* out, int accumulate, uint n,
+                            __global const float* x0, __global const float* x1, __global const float* x2,
+                            __global const float* x3, __global const float* x4, __global const float* x5,
+                            __global const float* x6, __global const float* x7, float w0, float w1,
+                            float w2, float w3, float w4, float w5, float w6, float w7) {
   if (get_global_id(0) != 0) return;
-  out[0] = accumulate ? out[0] + w * x[0] : w * x[0];
+  float s = accumulate ? out[0] + w0 * x0[0] : w0 * x0[0];
+  if (n > 1) s = s + w1 * x1[0];
+  if (n > 2) s = s + w2 * x2[0];
+  if (n > 3) s = s + w3 * x3[0];
+  if (n > 4) s = s + w4 * x4[0];
+  if (n > 5) s = s + w5 * x5[0];
+  if (n > 6) s = s + w6 * x6[0];
+  if (n > 7) s = s + w7 * x7[0];
+  out[0] = s;
 }
+
+// Its backward for eight terms: g_i[0] (+)= w_i gl[0] for the first n terms whose bit i of
+// `wanted` is set, added to where bit i of `accumulate` is.
+#define WEIGHTED_SUM_GRAD(i, g, w) \
+  if (n > i && ((wanted >> i) & 1u)) g[0] = ((accumulate >> i) & 1u) ? g[0] + w * v : w * v;
+__kernel void weighted_sum8_backward(__global const float* gl, uint n, uint wanted, uint accumulate,
+                                     __global float* g0, __global float* g1, __global float* g2,
+                                     __global float* g3, __global float* g4, __global float* g5,
+                                     __global float* g6, __global float* g7, float w0, float w1,
+                                     float w2, float w3, float w4, float w5, float w6, float w7) {
+  if (get_global_id(0) != 0) return;
+  const float v = gl[0];
+  WEIGHTED_SUM_GRAD(0, g0, w0)
+  WEIGHTED_SUM_GRAD(1, g1, w1)
+  WEIGHTED_SUM_GRAD(2, g2, w2)
+  WEIGHTED_SUM_GRAD(3, g3, w3)
+  WEIGHTED_SUM_GRAD(4, g4, w4)
+  WEIGHTED_SUM_GRAD(5, g5, w5)
+  WEIGHTED_SUM_GRAD(6, g6, w6)
+  WEIGHTED_SUM_GRAD(7, g7, w7)
+}
+#undef WEIGHTED_SUM_GRAD
 
 // ---- novel-view losses (render.hpp / losses.hpp) ---------------------------------------------
 // Raw field rows are [rgb(3), sigma, blend, ...] of C channels (kRaw* in render.hpp); `act`

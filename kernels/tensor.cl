@@ -9,6 +9,34 @@ __kernel void copy_cols(__global const float* src, __global float* dst, uint row
   dst[(size_t)r * dst_cols + offset + c] = src[(size_t)r * src_cols + c];
 }
 
+// Two parts at once (a concatenation's pair, one launch instead of two): dst[r, offset + c] =
+// src0[r, c] for c < cols0, src1[r, c - cols0] for the next cols1 columns.
+__kernel void copy_cols2(__global const float* src0, __global const float* src1, __global float* dst,
+                         uint rows, uint cols0, uint cols1, uint dst_cols, uint offset) {
+  const uint c = get_global_id(0), r = get_global_id(1);
+  if (c >= cols0 + cols1 || r >= rows) return;
+  dst[(size_t)r * dst_cols + offset + c] =
+      c < cols0 ? src0[(size_t)r * cols0 + c] : src1[(size_t)r * cols1 + (c - cols0)];
+}
+
+// Its backward: dsrc0 and dsrc1 (+)= their columns of ddst; bit 0 / 1 of `wanted`: dsrc0 /
+// dsrc1 is written, bit 2 / 3 of it: added to. An unwanted part's buffer may be the other's.
+__kernel void copy_cols2_back(__global const float* ddst, __global float* dsrc0, __global float* dsrc1,
+                              uint rows, uint cols0, uint cols1, uint dst_cols, uint offset, uint wanted) {
+  const uint c = get_global_id(0), r = get_global_id(1);
+  if (c >= cols0 + cols1 || r >= rows) return;
+  const float g = ddst[(size_t)r * dst_cols + offset + c];
+  if (c < cols0) {
+    if (!(wanted & 1u)) return;
+    const size_t i = (size_t)r * cols0 + c;
+    dsrc0[i] = (wanted & 4u) ? dsrc0[i] + g : g;
+  } else {
+    if (!(wanted & 2u)) return;
+    const size_t i = (size_t)r * cols1 + (c - cols0);
+    dsrc1[i] = (wanted & 8u) ? dsrc1[i] + g : g;
+  }
+}
+
 // dsrc[r, c] (+)= ddst[r, offset + c], over the same 2D range as copy_cols.
 __kernel void copy_cols_back(__global const float* ddst, __global float* dsrc, uint rows,
                              uint src_cols, uint dst_cols, uint offset, int accumulate) {

@@ -227,57 +227,72 @@ OpEntry linear_entry(bool with_bias) {
   return e;
 }
 
-// concat (variant 0, dims rows, A, B: [rows, A] beside [rows, B]) and stack (variant 1, dims
-// M, C, B: [M, C] on top of [B, M, C], the static and object NeRFs' outputs for
-// render_composite), both copies of their parts: exact forward, the upstream gradient split.
+// concat (variant 0, dims rows, W0, W1[, W2]: [rows, W0] beside [rows, W1] ...; variant 2 the
+// same with the middle part taking no gradient) and stack (variant 1, dims M, C, B: [M, C] on
+// top of [B, M, C], the static and object NeRFs' outputs for render_composite), both copies
+// of their parts: exact forward, the upstream gradient split. Two parts run as one launch
+// (copy_cols2), a third on its own (copy_cols).
 OpEntry concat_entry() {
   OpEntry e;
   e.name = "concat";
   e.shapes = {{{kOddRows, 3, 5}, 0, "1009 x (3 + 5)"},
               {{13, 3, 5}, 0, "13 x (3 + 5)"},
               {{1, 3, 5}, 0, "1 x (3 + 5)"},
+              {{kOddRows, 3, 2, 5}, 0, "1009 x (3 + 2 + 5)"},
+              {{13, 3, 5, 4}, 2, "13 x (3 + 5 + 4), the middle part without a gradient"},
               {{6, 5, 2}, 1, "stack [6, 5] on [2, 6, 5]"}};
-  e.build = [](Graph& g, const OpShape& s) {
+  const auto widths = [](const OpShape& s) { return std::vector<size_t>(s.dims.begin() + 1, s.dims.end()); };
+  e.build = [=](Graph& g, const OpShape& s) {
     if (s.variant == 1) {
       Tensor a = g.input("a", Shape{s.dims[0], s.dims[1]}, true);
       Tensor b = g.input("b", Shape{s.dims[2], s.dims[0], s.dims[1]}, true);
       return OpGraph{{a, b}, {stack({a, b})}, {}};
     }
-    Tensor a = g.input("a", Shape{s.dims[0], s.dims[1]}, true), b = g.input("b", Shape{s.dims[0], s.dims[2]}, true);
-    return OpGraph{{a, b}, {concat({a, b})}, {}};
+    std::vector<Tensor> parts;
+    const std::vector<size_t> w = widths(s);
+    for (size_t i = 0; i < w.size(); ++i)
+      parts.push_back(g.input(std::string(1, static_cast<char>('a' + i)), Shape{s.dims[0], w[i]}, !(s.variant == 2 && i == 1)));
+    return OpGraph{parts, {concat(parts)}, {}};
   };
-  e.values = [](const OpShape& s) {
+  e.values = [=](const OpShape& s) {
     if (s.variant == 1)
       return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -1, 1, 1),
                                              random_floats(s.dims[2] * s.dims[0] * s.dims[1], -1, 1, 2)};
-    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -1, 1, 121),
-                                           random_floats(s.dims[0] * s.dims[2], -1, 1, 122)};
-  };
-  // Columns [0, A) of every row, or [A, A + B); a stack's parts are one leading block each.
-  const auto split = [](const OpShape& s, const auto& full, int part) {
-    const size_t rows = s.variant == 1 ? 1 : s.dims[0];
-    const size_t A = s.variant == 1 ? s.dims[0] * s.dims[1] : s.dims[1], W = full.size() / rows;
-    std::vector<double> v;
-    for (size_t r = 0; r < rows; ++r)
-      for (size_t c = part ? A : 0; c < (part ? W : A); ++c) v.push_back(full[r * W + c]);
+    std::vector<std::vector<float>> v;
+    const std::vector<size_t> w = widths(s);
+    for (size_t i = 0; i < w.size(); ++i) v.push_back(random_floats(s.dims[0] * w[i], -1, 1, 121 + static_cast<unsigned>(i)));
     return v;
   };
-  e.reference = [](const OpCase& c) {
+  // Columns [first, first + width) of every row; a stack's parts are one leading block each.
+  const auto split = [=](const OpShape& s, const auto& full, size_t part) {
+    const std::vector<size_t> w = s.variant == 1 ? std::vector<size_t>{s.dims[0] * s.dims[1], s.dims[2] * s.dims[0] * s.dims[1]} : widths(s);
+    const size_t rows = s.variant == 1 ? 1 : s.dims[0], W = full.size() / rows;
+    size_t first = 0;
+    for (size_t i = 0; i < part; ++i) first += w[i];
+    std::vector<double> v;
+    for (size_t r = 0; r < rows; ++r)
+      for (size_t c = first; c < first + w[part]; ++c) v.push_back(full[r * W + c]);
+    return v;
+  };
+  e.reference = [=](const OpCase& c) {
     if (c.shape.variant == 1) {
       std::vector<double> ref = to_double(c.values[0]);
       ref.insert(ref.end(), c.values[1].begin(), c.values[1].end());
       return std::vector<Expected>{{ref, {0, 0}}};  // a copy: exact
     }
     std::vector<double> ref;
-    for (size_t r = 0; r < c.shape.dims[0]; ++r) {
-      for (size_t k = 0; k < c.shape.dims[1]; ++k) ref.push_back(c.values[0][r * c.shape.dims[1] + k]);
-      for (size_t k = 0; k < c.shape.dims[2]; ++k) ref.push_back(c.values[1][r * c.shape.dims[2] + k]);
-    }
+    const std::vector<size_t> w = widths(c.shape);
+    for (size_t r = 0; r < c.shape.dims[0]; ++r)
+      for (size_t i = 0; i < w.size(); ++i)
+        for (size_t k = 0; k < w[i]; ++k) ref.push_back(c.values[i][r * w[i] + k]);
     return std::vector<Expected>{{ref, {0, 0}}};  // a copy: exact
   };
   e.gradient = [=](const OpCase& c) {
-    return std::vector<Expected>{grad_expected(split(c.shape, c.upstream[0], 0)),
-                                 grad_expected(split(c.shape, c.upstream[0], 1))};
+    const size_t parts = c.shape.variant == 1 ? 2 : c.shape.dims.size() - 1;
+    std::vector<Expected> out;
+    for (size_t i = 0; i < parts; ++i)
+      out.push_back(c.shape.variant == 2 && i == 1 ? Expected{} : grad_expected(split(c.shape, c.upstream[0], i)));
+    return out;
   };
   e.fd = GradCheckOptions{};
   e.flops = [](const OpShape&) { return 0.0; };

@@ -56,34 +56,62 @@ OpEntry mse_entry() {
 OpEntry weighted_sum_entry() {
   OpEntry e;
   e.name = "weighted_sum";
-  // 3 mse(a, 0) + 0.5 mse(b, 0) over n values.
-  e.shapes = {{{10}, 0, "2 x 10"}, {{1}, 0, "2 x 1"}};
-  e.build = [](Graph& g, const OpShape& s) {
-    const size_t n = s.dims[0];
-    Tensor a = g.input("a", Shape{n}, true), b = g.input("b", Shape{n}, true), zero = g.input("zero", Shape{n});
-    Tensor l = weighted_sum({mse(a, zero), mse(b, zero)}, {3.0f, 0.5f});
-    return OpGraph{{a, b, zero}, {l}, l};
+  // sum_i w_i mse(a_i, 0) over n values and T terms; dims {n, T}. Two terms with weights 3 and
+  // 0.5; eleven (two launches of eight) with weights 0.25 + 0.5 i, every third term's input
+  // without a gradient.
+  e.shapes = {{{10, 2}, 0, "2 x 10"}, {{1, 2}, 0, "2 x 1"}, {{3, 11}, 0, "11 x 3, every third without a gradient"}};
+  const auto weight = [](size_t T, size_t i) { return T == 2 ? (i == 0 ? 3.0f : 0.5f) : 0.25f + 0.5f * static_cast<float>(i); };
+  const auto wants_grad = [](size_t T, size_t i) { return T == 2 || i % 3 != 2; };
+  e.build = [=](Graph& g, const OpShape& s) {
+    const size_t n = s.dims[0], T = s.dims[1];
+    std::vector<Tensor> inputs, terms;
+    std::vector<float> w;
+    Tensor zero = g.input("zero", Shape{n});
+    for (size_t i = 0; i < T; ++i) {
+      inputs.push_back(g.input("a" + std::to_string(i), Shape{n}, wants_grad(T, i)));
+      terms.push_back(mse(inputs.back(), zero));
+      w.push_back(weight(T, i));
+    }
+    inputs.push_back(zero);
+    Tensor l = weighted_sum(terms, w);
+    return OpGraph{inputs, {l}, l};
   };
   e.values = [](const OpShape& s) {
-    return std::vector<std::vector<float>>{random_floats(s.dims[0], -1, 1, 81), random_floats(s.dims[0], -1, 1, 82),
-                                           std::vector<float>(s.dims[0], 0.0f)};
+    std::vector<std::vector<float>> v;
+    for (size_t i = 0; i < s.dims[1]; ++i) v.push_back(random_floats(s.dims[0], -1, 1, 81 + static_cast<uint32_t>(i)));
+    v.push_back(std::vector<float>(s.dims[0], 0.0f));
+    return v;
   };
-  e.reference = [](const OpCase& c) {
-    double sa = 0, sb = 0;
-    const double n = double(c.values[0].size());
-    for (size_t i = 0; i < c.values[0].size(); ++i) sa += double(c.values[0][i]) * c.values[0][i], sb += double(c.values[1][i]) * c.values[1][i];
-    // Two float32 sums of <= 10 squares and one weighted sum: rtol 1e-6.
-    return std::vector<Expected>{{{3.0 * sa / n + 0.5 * sb / n}, {0, 1e-6}}};
+  e.reference = [=](const OpCase& c) {
+    const size_t T = c.shape.dims[1];
+    const double n = double(c.shape.dims[0]);
+    double total = 0;
+    for (size_t i = 0; i < T; ++i) {
+      double sq = 0;
+      for (float x : c.values[i]) sq += double(x) * x;
+      total += double(weight(T, i)) * sq / n;
+    }
+    // float32 sums of <= 10 squares and a weighted sum of <= 11 positive terms: rtol 1e-6.
+    return std::vector<Expected>{{{total}, {0, 1e-6}}};
   };
-  e.gradient = [](const OpCase& c) {
-    const double n = double(c.values[0].size());
-    std::vector<double> da, db;
-    for (float x : c.values[0]) da.push_back(3.0 * 2.0 * x / n);
-    for (float x : c.values[1]) db.push_back(0.5 * 2.0 * x / n);
-    return std::vector<Expected>{grad_expected(da), grad_expected(db), {}};
+  e.gradient = [=](const OpCase& c) {
+    const size_t T = c.shape.dims[1];
+    const double n = double(c.shape.dims[0]);
+    std::vector<Expected> out;
+    for (size_t i = 0; i < T; ++i) {
+      if (!wants_grad(T, i)) {
+        out.push_back({});
+        continue;
+      }
+      std::vector<double> d;
+      for (float x : c.values[i]) d.push_back(double(weight(T, i)) * 2.0 * x / n);
+      out.push_back(grad_expected(d));
+    }
+    out.push_back({});
+    return out;
   };
   e.fd = GradCheckOptions{};
-  e.flops = [](const OpShape& s) { return double(s.dims[0]) * 12; };
+  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1]) * 6; };
   return e;
 }
 

@@ -16,11 +16,22 @@ class ConcatOp final : public Op {
   }
   std::string type() const override { return type_; }
 
+  // Parts two at a time (copy_cols2: half the launches, which a GPU pays for more than the
+  // copy), a last odd one alone.
   void forward(ExecContext& ctx) override {
     const size_t rows = ctx.out_rows(0, rows_);
     if (rows == 0) return;
     size_t offset = 0;
-    for (size_t i = 0; i < widths_.size(); ++i) {
+    for (size_t i = 0; i < widths_.size(); i += 2) {
+      if (i + 1 < widths_.size()) {
+        ctx.launch("tensor", "copy_cols2")
+            .arg(ctx.in(i)).arg(ctx.in(i + 1)).arg(ctx.out(0)).arg(detail::u32(rows, "rows"))
+            .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(widths_[i + 1], "cols"))
+            .arg(detail::u32(total_, "cols")).arg(detail::u32(offset, "offset"))
+            .run2(widths_[i] + widths_[i + 1], rows);
+        offset += widths_[i] + widths_[i + 1];
+        continue;
+      }
       ctx.launch("tensor", "copy_cols")
           .arg(ctx.in(i)).arg(ctx.out(0)).arg(detail::u32(rows, "rows"))
           .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
@@ -33,9 +44,23 @@ class ConcatOp final : public Op {
   void backward(ExecContext& ctx) override {
     cl_mem dy = ctx.grad_out(0);
     const size_t rows = ctx.out_rows(0, rows_);
+    if (!dy || rows == 0) return;
     size_t offset = 0;
-    for (size_t i = 0; i < widths_.size(); ++i) {
-      if (cl_mem dx = ctx.grad_in(i); dx && dy && rows > 0)
+    for (size_t i = 0; i < widths_.size(); i += 2) {
+      if (i + 1 < widths_.size()) {
+        cl_mem d0 = ctx.grad_in(i), d1 = ctx.grad_in(i + 1);
+        const unsigned wanted = (d0 ? 1u : 0u) | (d1 ? 2u : 0u) | (d0 && ctx.accumulate_in(i) ? 4u : 0u) |
+                                (d1 && ctx.accumulate_in(i + 1) ? 8u : 0u);
+        if (d0 || d1)
+          ctx.launch("tensor", "copy_cols2_back")
+              .arg(dy).arg(d0 ? d0 : d1).arg(d1 ? d1 : d0).arg(detail::u32(rows, "rows"))
+              .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(widths_[i + 1], "cols"))
+              .arg(detail::u32(total_, "cols")).arg(detail::u32(offset, "offset")).arg(wanted)
+              .run2(widths_[i] + widths_[i + 1], rows);
+        offset += widths_[i] + widths_[i + 1];
+        continue;
+      }
+      if (cl_mem dx = ctx.grad_in(i))
         ctx.launch("tensor", "copy_cols_back")
             .arg(dy).arg(dx).arg(detail::u32(rows, "rows"))
             .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
