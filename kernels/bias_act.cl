@@ -56,10 +56,13 @@ __kernel void bias_act_backward(__global const float* y, __global const float* d
 
 // Bias gradient, stage 1: partial[p, j] = sum over rows p, p + parts, ... of dy * act'(y) in
 // column j % cols of batch j / cols. Stage 2 is colsum_finish (reduce.cl). Reading y and dy
-// directly keeps db independent of whatever else accumulates into dh.
+// directly keeps db independent of whatever else accumulates into dh. With write_dh it also
+// writes dh (+)= dy act'(y) for the elements it reads, bias_act_backward's values, in the same
+// pass (one launch and one read of y and dy fewer); dh may be dy itself, each element being
+// read before it is written by the one work-item that owns it.
 __kernel void bias_grad_partial(__global const float* y, __global const float* dy,
-                                __global float* partial, uint rows, uint cols, uint batch_cols,
-                                uint parts) {
+                                __global float* partial, __global float* dh, uint rows, uint cols,
+                                uint batch_cols, uint parts, int write_dh, int accumulate_dh) {
 #pragma OPENCL FP_CONTRACT OFF  // as in bias_act_backward
   const uint j = get_global_id(0);
   const uint p = get_global_id(1);
@@ -68,7 +71,9 @@ __kernel void bias_grad_partial(__global const float* y, __global const float* d
   float s = 0.0f;
   for (uint r = p; r < rows; r += parts) {
     const size_t i = base + (size_t)r * cols;
-    s += dy[i] * act_derivative(y[i]);
+    const float g = dy[i] * act_derivative(y[i]);
+    s += g;
+    if (write_dh) dh[i] = accumulate_dh ? dh[i] + g : g;
   }
   partial[(size_t)p * batch_cols + j] = s;
 }

@@ -32,10 +32,12 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t capac
         .arg(u32(s.cols, "cols")).arg(u32(s.batch, "batches")).arg(u32(parts, "parts"))
         .arg(static_cast<int>(write_dh)).arg(static_cast<int>(acc_dh))
         .run2(s.batch * chunks, 1, 1, 1);
-  } else if (db) {
+  } else if (db) {  // dh in the same pass
+    const bool write_dh = dh && n > 0;
     ctx.launch("bias_act", "bias_grad_partial", options)
-        .arg(y).arg(dy).arg(partials).arg(u32(s.rows, "rows"))
+        .arg(y).arg(dy).arg(partials).arg(write_dh ? dh : partials).arg(u32(s.rows, "rows"))
         .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
+        .arg(static_cast<int>(write_dh)).arg(static_cast<int>(acc_dh))
         .run2(bc, parts);
   }
   if (db) {
@@ -52,7 +54,7 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t capac
         .arg(u32(last_parts, "parts")).arg(static_cast<int>(acc_db))
         .run(bc);
   }
-  if (dh && n > 0 && !row_walk)
+  if (dh && n > 0 && !row_walk && !db)  // no bias gradient to take dh along with
     ctx.launch("bias_act", "bias_act_backward", options)
         .arg(y).arg(dy).arg(dh).arg(u32(n, "bias_act size")).arg(static_cast<int>(acc_dh))
         .run(n);
