@@ -4,6 +4,8 @@
 # and the main job, and writes what it saw to OUT_DIR:
 #   machine.txt   GPU, driver, compiler, CMake, torch, and the device embed_core runs on
 #   build.log     the build          ctest.log   the suites, one line each, failures in full
+#   suites/       each suite that did not pass, run again alone: NAME.log (every case and its
+#                 time), stacks.txt (its processes' stacks if it still ran after NOVA_GPU_STACK_S)
 #   mlp.txt       nova-bench mlp, GEMMs as chosen (tuned: split-K weight gradient) and CLBlast
 #                 unsplit, beside PyTorch on the same GPU where python3 has CUDA torch
 #   step.txt      nova-bench step: quick and reference, 1 and 2 objects, default synthetic scene
@@ -56,6 +58,34 @@ if ! skip ctest; then
     --output-on-failure >"$OUT_DIR/ctest.log" 2>&1
   echo "ctest exit $?" >>"$OUT_DIR/ctest.log"
   grep -E "tests passed|tests failed|\*\*\*Failed|Timeout|ctest exit" "$OUT_DIR/ctest.log" | tail -20
+  # Suites that did not pass (failed, timed out or still running when the stage ended), again
+  # one at a time with every test case logged (suites/NAME.log); one still running after
+  # NOVA_GPU_STACK_S seconds has its processes' stacks written (suites/stacks.txt) where
+  # cuda-gdb or gdb is at hand, and ends after NOVA_GPU_ALONE_S.
+  started=$(grep -oE "Start +[0-9]+: [A-Za-z0-9_]+" "$OUT_DIR/ctest.log" | awk '{print $3}' | sort -u)
+  passed=$(grep -oE "Test +#[0-9]+: [A-Za-z0-9_]+ \.+ +Passed" "$OUT_DIR/ctest.log" | awk '{print $3}' | sort -u)
+  debugger=$(command -v cuda-gdb || command -v gdb || true)
+  descendants() { local c; for c in $(pgrep -P "$1"); do echo "$c"; descendants "$c"; done; }
+  suites=$("$BUILD/tests/nova_tests" --list_content 2>&1 | grep -oE "^[A-Za-z0-9_]+" | sort -u)
+  for s in $(comm -23 <(echo "$started") <(echo "$passed")); do
+    grep -qx "$s" <<<"$suites" || continue  # a test that is no suite of nova_tests
+    stage "suite $s alone"
+    mkdir -p "$OUT_DIR/suites"
+    (cd "$BUILD/tests" && exec timeout -s KILL "${NOVA_GPU_ALONE_S:-120}" stdbuf -oL -eL ./nova_tests --run_test="$s" \
+      --log_level=unit_scope --report_level=short) >"$OUT_DIR/suites/$s.log" 2>&1 &
+    job=$!
+    for _ in $(seq "${NOVA_GPU_STACK_S:-60}"); do kill -0 $job 2>/dev/null || break; sleep 1; done
+    if kill -0 $job 2>/dev/null && [ -n "$debugger" ]; then
+      for p in $(descendants $job); do
+        case $(ps -o comm= -p "$p") in nova_tests|nova) ;; *) continue ;; esac
+        echo "== $s: pid $p: $(tr '\0' ' ' </proc/$p/cmdline | cut -c1-300)"
+        timeout 20 "$debugger" -p "$p" -batch -ex "thread apply all bt 16" 2>&1 | grep -E "^Thread|^#"
+      done >>"$OUT_DIR/suites/stacks.txt"
+    fi
+    wait $job
+    echo "exit $?" >>"$OUT_DIR/suites/$s.log"
+    grep -E "Leaving test case|has passed|failed|exit" "$OUT_DIR/suites/$s.log" | tail -6
+  done
 fi
 
 if ! skip mlp; then
