@@ -21,7 +21,7 @@
 # one that hangs leaves the others their time; NOVA_GPU_SKIP names stages to leave out (e.g.
 # "render ops").
 set -uo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 OUT_DIR=${1:?usage: bash scripts/gpu-check.sh OUT_DIR [BUILD_DIR]}
 BUILD=${2:-build-gpu}
 mkdir -p "$OUT_DIR"
@@ -78,7 +78,7 @@ if ! skip ctest; then
     if kill -0 $job 2>/dev/null && [ -n "$debugger" ]; then
       for p in $(descendants $job); do
         case $(ps -o comm= -p "$p") in nova_tests|nova) ;; *) continue ;; esac
-        echo "== $s: pid $p: $(tr '\0' ' ' </proc/$p/cmdline | cut -c1-300)"
+        echo "== $s: pid $p: $(tr '\0' ' ' <"/proc/$p/cmdline" | cut -c1-300)"
         timeout 20 "$debugger" -p "$p" -batch -ex "thread apply all bt 16" 2>&1 | grep -E "^Thread|^#"
       done >>"$OUT_DIR/suites/stacks.txt"
     fi
