@@ -280,38 +280,32 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& views, const std:
                                 const AlignmentOptions& options) {
   if (anchors.size() != views.size()) throw Error("track_object: " + std::to_string(views.size()) + " views but " +
                                                   std::to_string(anchors.size()) + " anchors", kExitInternal);
-  std::vector<Mat34> poses;
+  if (views.empty()) return {};
+  // The anchors' move from view j - 1 to view j: each alignment's starting translation.
+  const auto shift = [&](size_t j) {
+    Vec3 s{};
+    for (size_t d = 0; d < 3; ++d) s[d] = anchors[j][d] - anchors[j - 1][d];
+    return s;
+  };
+  std::vector<Mat34> poses(1, kIdentity);
+  for (size_t d = 0; d < 3; ++d) poses[0][d * 4 + 3] = anchors[0][d];
   poses.reserve(views.size());
-  if (options.window <= 1 && !views.empty()) {
+  if (options.window <= 1) {
     // Each frame aligned to the one before alone: the pairs do not depend on each other's
     // poses, so they run at once and the poses are chained after.
     std::vector<Mat34> step(views.size(), kIdentity);
     detail::parallel_for(views.size() - 1, [&](size_t p) {
-      const size_t j = p + 1;
-      Vec3 shift{};
-      for (int d = 0; d < 3; ++d) shift[static_cast<size_t>(d)] = anchors[j][static_cast<size_t>(d)] - anchors[j - 1][static_cast<size_t>(d)];
-      step[j] = align_object(std::vector<PlacedView>{{views[j - 1], kIdentity}}, views[j], shift, options).motion;
+      step[p + 1] = align_object(views[p], views[p + 1], shift(p + 1), options).motion;
     });
-    Mat34 first = kIdentity;
-    for (int d = 0; d < 3; ++d) first[static_cast<size_t>(d * 4 + 3)] = anchors[0][static_cast<size_t>(d)];
-    poses.push_back(first);
     for (size_t j = 1; j < views.size(); ++j) poses.push_back(compose_rigid(step[j], poses[j - 1]));
     return poses;
   }
-  for (size_t j = 0; j < views.size(); ++j) {
-    if (j == 0) {
-      Mat34 first = kIdentity;
-      for (int d = 0; d < 3; ++d) first[static_cast<size_t>(d * 4 + 3)] = anchors[0][static_cast<size_t>(d)];
-      poses.push_back(first);
-      continue;
-    }
+  for (size_t j = 1; j < views.size(); ++j) {
     // The last `window` views, each placed where the object stood in view j - 1.
     std::vector<PlacedView> earlier;
-    for (size_t i = j; i-- > 0 && earlier.size() < static_cast<size_t>(std::max(options.window, 1));)
+    for (size_t i = j; i-- > 0 && earlier.size() < static_cast<size_t>(options.window);)
       earlier.push_back({views[i], i + 1 == j ? kIdentity : compose_rigid(poses[j - 1], invert_rigid(poses[i]))});
-    Vec3 shift{};
-    for (int d = 0; d < 3; ++d) shift[static_cast<size_t>(d)] = anchors[j][static_cast<size_t>(d)] - anchors[j - 1][static_cast<size_t>(d)];
-    poses.push_back(compose_rigid(align_object(earlier, views[j], shift, options).motion, poses[j - 1]));
+    poses.push_back(compose_rigid(align_object(earlier, views[j], shift(j), options).motion, poses[j - 1]));
   }
   return poses;
 }
