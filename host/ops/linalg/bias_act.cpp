@@ -22,10 +22,10 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t capac
   const BiasGradWalk walk = db ? bias_grad_walk(ctx.rt.info()) : BiasGradWalk::Strided;
   const bool row_walk = walk != BiasGradWalk::Strided;
   const size_t parts = bias_grad_parts(walk, capacity), folds = bias_grad_folds(parts);
+  const bool write_dh = dh && n > 0;
   if (walk == BiasGradWalk::Host && (act == Activation::Identity || act == Activation::ReLU)) {
     bias_grad_rows_host(ctx.rt, s, act, parts, y, dy, partials, dh, acc_dh);
   } else if (row_walk) {
-    const bool write_dh = dh && n > 0;
     const size_t chunks = (s.cols + kRowWalkColumns - 1) / kRowWalkColumns;
     ctx.launch("bias_act", "bias_grad_rows", options)
         .arg(y).arg(dy).arg(partials).arg(write_dh ? dh : partials).arg(u32(s.rows, "rows"))
@@ -33,7 +33,6 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t capac
         .arg(static_cast<int>(write_dh)).arg(static_cast<int>(acc_dh))
         .run2(s.batch * chunks, 1, 1, 1);
   } else if (db) {  // dh in the same pass
-    const bool write_dh = dh && n > 0;
     ctx.launch("bias_act", "bias_grad_partial", options)
         .arg(y).arg(dy).arg(partials).arg(write_dh ? dh : partials).arg(u32(s.rows, "rows"))
         .arg(u32(s.cols, "cols")).arg(u32(bc, "batch cols")).arg(u32(parts, "parts"))
@@ -54,7 +53,7 @@ void bias_act_backward(ExecContext& ctx, Matrix3 s, Activation act, size_t capac
         .arg(u32(last_parts, "parts")).arg(static_cast<int>(acc_db))
         .run(bc);
   }
-  if (dh && n > 0 && !row_walk && !db)  // no bias gradient to take dh along with
+  if (write_dh && !db)  // no bias gradient to take dh along with (and so no row walk)
     ctx.launch("bias_act", "bias_act_backward", options)
         .arg(y).arg(dy).arg(dh).arg(u32(n, "bias_act size")).arg(static_cast<int>(acc_dh))
         .run(n);
