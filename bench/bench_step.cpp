@@ -8,7 +8,8 @@
 // continues a trained run (its configuration, weights, occupancy grids and phase): the step a
 // long training takes once its grids skip empty space. With --anchor DIR it alternates nova's
 // steps with the original NOVA code's (bench/anchor_run.hpp) on the same scene and networks and
-// prints the ratios. Built only with nova_io.
+// prints the ratios; nova's side is the dense step, or for a phase a trained run given with
+// --run is in, that run's next steps. Built only with nova_io.
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -162,15 +163,22 @@ void write_csv(const std::vector<Row>& rows, const std::string& out, const std::
   }
 }
 
+// Whether a run's checkpoint is in the joint phase (a run of pretraining alone is not, at its end too).
+bool joint_checkpoint(const RunFiles& files) { return files.checkpoint.get("phase") == "joint"; }
+
 // A copy of the run's config.ini and checkpoint.bin in `dir`, resumed: every later step of it
-// is the step the run would take next (its own randomness, grids and their updates).
-std::unique_ptr<Trainer> resumed_copy(Runtime& rt, const Scene& scene, TrainConfig c, const RunFolder& run,
+// is the step the run would take next (its own randomness, grids and their updates), in the
+// checkpoint's phase.
+std::unique_ptr<Trainer> resumed_copy(Runtime& rt, const Scene& scene, const RunFiles& files, const RunFolder& run,
                                       const fs::path& dir, long more_steps, bool profile = false,
                                       int log_every = 1000000) {
   fs::create_directories(dir);
   fs::copy_file(run.config_path(), dir / kConfigFile, fs::copy_options::overwrite_existing);
   fs::copy_file(run.checkpoint_path(), dir / kCheckpointFile, fs::copy_options::overwrite_existing);
-  c.steps += static_cast<int>(more_steps);  // room to go on past the run's end
+  TrainConfig c = files.config;
+  // Room to go on past the run's end in its own phase: a run that stopped in or at the end of
+  // pretraining goes on pretraining.
+  (joint_checkpoint(files) ? c.steps : c.pretrain_steps) += static_cast<int>(more_steps);
   c.log_every = log_every;
   c.checkpoint_every = 1000000;
   auto t = std::make_unique<Trainer>(rt, scene, c, dir.string());
@@ -179,16 +187,33 @@ std::unique_ptr<Trainer> resumed_copy(Runtime& rt, const Scene& scene, TrainConf
   return t;
 }
 
-int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
-  const RunFolder run(o.str("run"));
-  const RunFiles files = run.read();
-  const std::string scene_dir = o.str("scene").empty() ? files.scene : o.str("scene");
-  if (scene_dir.empty()) throw Error("--run: '" + run.config_path() + "' names no scene: pass --scene");
+// A trained run, its files and the scene it trains on (--scene, else the run's own).
+struct TrainedRun {
+  RunFolder run;
+  RunFiles files;
+  std::string scene_dir;
+  Scene scene;
+};
+
+TrainedRun trained_run(const std::string& dir, const std::string& scene_option) {
+  TrainedRun t{RunFolder(dir), {}, {}, {}};
+  t.files = t.run.read();
+  t.scene_dir = scene_option.empty() ? t.files.scene : scene_option;
+  if (t.scene_dir.empty()) throw Error("--run: '" + t.run.config_path() + "' names no scene: pass --scene");
   LoadOptions lo;
-  lo.factor = files.config.factor;
-  lo.static_only = files.config.static_only;
+  lo.factor = t.files.config.factor;
+  lo.static_only = t.files.config.static_only;
   lo.load_gt = false;
-  const Scene scene = load_scene(scene_dir, lo);
+  t.scene = load_scene(t.scene_dir, lo);
+  return t;
+}
+
+int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
+  const TrainedRun tr = trained_run(o.str("run"), o.str("scene"));
+  const RunFolder& run = tr.run;
+  const RunFiles& files = tr.files;
+  const std::string& scene_dir = tr.scene_dir;
+  const Scene& scene = tr.scene;
   const ScratchDir scratch("step");
   Runtime rt(select_device(o.str("device")), false);
   Runtime prt(rt.info(), true);
@@ -196,11 +221,10 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
   Row r;
   std::ostringstream profiles;
   {
-    const long at = std::stol(files.checkpoint.get("step"));
-    const bool joint = at >= files.config.pretrain_steps && scene.num_objects > 0;
+    const bool joint = joint_checkpoint(files);
     std::string why;
     auto peer = torch_for(torch_python(o.str("torch")), files.config, 1 + (joint ? scene.num_objects : 0), why);
-    auto t = resumed_copy(rt, scene, files.config, run, scratch / "run", more, false, peer ? 1 : 1000000);
+    auto t = resumed_copy(rt, scene, files, run, scratch / "run", more, false, peer ? 1 : 1000000);
     std::cout << "device " << rt.info().name << "; run " << run.dir() << " (preset " << files.config.preset
               << ", step " << t->step() << ", " << (joint ? "joint" : "pretraining") << ") on " << scene_dir << "; "
               << warmup << " warm-up + " << steps << " timed steps, skipping as the run's grids say\n\n";
@@ -213,7 +237,7 @@ int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
   r.rss_mb = peak_rss_mb();
   print_row(r);
   if (profile_steps > 0) {
-    auto t = resumed_copy(prt, scene, files.config, run, scratch / "profile", more, true);
+    auto t = resumed_copy(prt, scene, files, run, scratch / "profile", more, true);
     profiles << "\n" << r.preset << " " << r.phase << " (" << profile_steps << " profiled steps)\n"
              << profiled_steps(*t, warmup, profile_steps);
   }
@@ -260,8 +284,30 @@ std::string profile_of(Runtime& prt, const Scene& s, const TrainConfig& preset, 
 
 // nova's pretraining and joint rows, then one run of the NOVA code, `rounds` times; then the
 // comparison and one profile of each of nova's phases (after the rounds: no part of a timing).
+// A phase's row continued from a trained run (as step_of_run, without PyTorch): `per_step`
+// gets every timed step's seconds.
+Row run_row(Runtime& rt, const TrainedRun& tr, long warmup, long steps, const fs::path& dir,
+            std::vector<double>& per_step) {
+  const bool joint = joint_checkpoint(tr.files);
+  auto t = resumed_copy(rt, tr.scene, tr.files, tr.run, dir, warmup + steps, false, 1);
+  Row r{tr.files.config.preset, joint ? "joint" : "pretrain", joint ? tr.scene.num_objects : 0, tr.files.config.rays,
+        tr.files.config.samples};
+  r.seconds = time_steps(rt, *t, warmup, steps, nullptr, nullptr, &per_step, &r.commands);
+  r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
+  r.rss_mb = peak_rss_mb();
+  return r;
+}
+
+// The run of `runs` in the joint phase (or in pretraining), or null.
+const TrainedRun* run_in_phase(const std::vector<TrainedRun>& runs, bool joint) {
+  for (const TrainedRun& r : runs)
+    if (joint_checkpoint(r.files) == joint) return &r;
+  return nullptr;
+}
+
 int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& preset, const std::string& name, int K,
-                  long warmup, long steps, long profile_steps, AnchorRun anchor, const ScratchDir& scratch) {
+                  long warmup, long steps, long profile_steps, AnchorRun anchor, const ScratchDir& scratch,
+                  const std::vector<TrainedRun>& runs) {
   const long rounds = o.integer("rounds");
   Runtime rt(select_device(o.str("device")), false);
   anchor.cpu = (rt.info().type & CL_DEVICE_TYPE_CPU) != 0;
@@ -271,7 +317,17 @@ int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& prese
   std::cout << "device " << rt.info().name << "; scene " << o.str("scene") << " (" << scene.frames[0].camera.width << "x"
             << scene.frames[0].camera.height << ", K=" << K << ", preset " << name << "); " << rounds
             << " rounds, each nova's " << warmup << " warm-up + " << steps
-            << " timed steps per phase (dense step), then the NOVA code: " << anchor.describe() << "\n\n";
+            << " timed steps per phase, then the NOVA code: " << anchor.describe() << "\n";
+  for (const bool joint : {false, true}) {
+    const TrainedRun* r = run_in_phase(runs, joint);
+    std::cout << "nova's " << (joint ? "joint" : "pretraining") << " steps: ";
+    if (r)
+      std::cout << "continuing run " << r->run.dir() << " from step " << r->files.checkpoint.get("step")
+                << " (skipping empty space as its grids say)\n";
+    else
+      std::cout << "the dense step (no empty-space skipping)\n";
+  }
+  std::cout << "\n";
   const Scene s = with_objects(scene, K);
   const std::string python = torch_python(o.str("torch"));
   bool told_torch = false;
@@ -281,7 +337,10 @@ int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& prese
     AnchorRound a;
     for (const bool joint : {false, true}) {
       std::vector<double> each;
-      rows.push_back(time_row(rt, s, preset, name, joint, K, warmup, steps, scratch / "run", python, told_torch, &each));
+      const TrainedRun* from = run_in_phase(runs, joint);
+      rows.push_back(from ? run_row(rt, *from, warmup, steps, scratch / "run", each)
+                          : time_row(rt, s, preset, name, joint, K, warmup, steps, scratch / "run", python, told_torch,
+                                     &each));
       (joint ? a.nova.joint : a.nova.pretrain) = median(each);
       print_row(rows.back());
     }
@@ -351,7 +410,9 @@ int step(const Args& args) {
                  "--out: also write the table as CSV here\n"
                  "--device: OpenCL device, as nova's --device\n"
               << "--run RUN: continue a trained run instead (its config, weights, grids and phase; --scene\n"
-                 "  defaults to the run's scene; --presets, --objects and --factor do not apply)\n"
+                 "  defaults to the run's scene; --presets, --objects and --factor do not apply). With --anchor:\n"
+                 "  RUN[,RUN], at most one run per phase, trained on the anchor's scene: nova's steps of that\n"
+                 "  phase continue the run (the step a long training takes once it skips empty space)\n"
               << "--torch: auto (/usr/bin/python3, when it has torch), off, or an interpreter's path: each row's\n"
                  "  MLPs alone (the preset's trunk at the step's rows of every NeRF) in PyTorch, alternating\n"
               << "--anchor DIR: the NOVA code anchor (nova_ref: run.sh, data/Balloon1): --rounds times nova's\n"
@@ -365,8 +426,8 @@ int step(const Args& args) {
   }
   const long steps = o.integer("steps"), warmup = o.integer("warmup"), profile_steps = o.integer("profile-steps");
   if (steps < 1 || warmup < 0 || profile_steps < 0) throw Error("--steps must be >= 1, --warmup and --profile-steps >= 0");
-  if (!o.str("run").empty()) {
-    if (!o.str("anchor").empty()) throw Error("--anchor steps on the NOVA code's scene from scratch: drop --run");
+  if (!o.str("run").empty() && o.str("anchor").empty()) {
+    if (o.strings("run").size() != 1) throw Error("--run: one run (two, one per phase, go with --anchor)");
     return step_of_run(o, steps, warmup, profile_steps);
   }
   const ScratchDir scratch("step");
@@ -396,7 +457,27 @@ int step(const Args& args) {
   if (!o.str("anchor").empty()) {
     if (presets.size() != 1 || objects.size() != 1)
       throw Error("--anchor compares one preset and one object count (the NOVA code's: --presets reference --objects 1)");
-    return beside_anchor(o, scene, presets[0], preset_list[0], objects[0], warmup, steps, profile_steps, anchor, scratch);
+    std::vector<TrainedRun> runs;
+    if (!o.str("run").empty())
+      for (const std::string& dir : o.strings("run")) {
+        runs.push_back(trained_run(dir, ""));
+        const TrainedRun& r = runs.back();
+        const Camera& a = scene.frames[0].camera;
+        const Camera& b = r.scene.frames[0].camera;
+        if (r.files.config.preset != preset_list[0] || r.scene.num_objects != objects[0] || a.width != b.width ||
+            a.height != b.height)
+          throw Error("--run " + dir + ": trained with preset " + r.files.config.preset + " on " +
+                      std::to_string(b.width) + "x" + std::to_string(b.height) + " with " +
+                      std::to_string(r.scene.num_objects) + " objects; the NOVA code steps on " +
+                      std::to_string(a.width) + "x" + std::to_string(a.height) + " with " +
+                      std::to_string(objects[0]) + " (preset " + preset_list[0] + ")");
+        if (runs.size() == 2 && joint_checkpoint(runs[0].files) == joint_checkpoint(runs[1].files))
+          throw Error("--run: both runs are in the " + std::string(joint_checkpoint(r.files) ? "joint" : "pretraining") +
+                      " phase; give at most one run per phase");
+        if (runs.size() > 2) throw Error("--run: at most two runs with --anchor, one per phase");
+      }
+    return beside_anchor(o, scene, presets[0], preset_list[0], objects[0], warmup, steps, profile_steps, anchor, scratch,
+                         runs);
   }
 
   Runtime rt(select_device(o.str("device")), false);

@@ -87,7 +87,7 @@ BOOST_AUTO_TEST_CASE(a_wrong_anchor_is_refused_before_any_step, *boost::unit_tes
            {"--anchor " + missing.string(), missing.string() + "' is no folder"},
            {"--anchor " + empty.string(), empty.string() + "' has no run.sh"},
            {"--anchor " + missing.string() + " --rounds 0", "--rounds"},
-           {"--anchor " + missing.string() + " --run " + missing.string(), "drop --run"}}) {
+           {"--anchor " + missing.string() + " --run " + missing.string(), missing.string() + "' is no folder"}}) {
     const CommandResult r = run_built("nova-bench", "step " + args, dir);
     BOOST_TEST(r.code == 2, args);
     BOOST_TEST(r.err.find(names) != std::string::npos, args << ": " << r.err);
@@ -130,6 +130,45 @@ BOOST_AUTO_TEST_CASE(rounds_alternate_with_the_nova_code, *boost::unit_test::pre
     BOOST_TEST(v[2] > 0.0);
     BOOST_TEST(v[3] == (row.find(",joint,") != std::string::npos ? 5.0 : 1.5));
     BOOST_TEST(v[4] == v[3] / v[2], boost::test_tools::tolerance(1e-3));
+  }
+}
+
+// With --run, a phase a trained run is in continues that run (its grids skip empty space), the
+// other phase stays the dense step; runs that do not fit the NOVA code's scene are refused.
+BOOST_AUTO_TEST_CASE(trained_runs_stand_for_their_phases, *boost::unit_test::precondition([](auto) { return built("nova") && has_bench(); })) {
+  const StandIn s(kLoggingRunSh);
+  const fs::path pre = s.dir / "pre", joint = s.dir / "joint";
+  const std::string scene = cached_tiny_scene().string();
+  const CommandResult a = run_built("nova", "train --scene " + scene + " --out " + pre.string() +
+                                                " --pretrain-steps 4 --steps 0 --occupancy-warmup 2 --occupancy-every 2", s.dir);
+  BOOST_TEST_REQUIRE(a.code == 0, a.err);
+  const CommandResult b = run_built("nova", "train --scene " + scene + " --out " + joint.string() +
+                                                " --pretrain-steps 4 --steps 6 --occupancy-warmup 2 --occupancy-every 2", s.dir);
+  BOOST_TEST_REQUIRE(b.code == 0, b.err);
+  const std::string checkpoint = read_all(joint / "checkpoint.bin");
+  const std::string base = "step --anchor " + s.anchor.string() + " --anchor-python " + s.python.string() + " --scene " +
+                           scene + " --factor 1 --presets quick --warmup 1 --steps 1 --profile-steps 0 --rounds 1 ";
+
+  const CommandResult both = run_built("nova-bench", base + "--objects 2 --run " + pre.string() + "," + joint.string(), s.dir);
+  BOOST_TEST_REQUIRE(both.code == 0, both.err << both.out);
+  BOOST_TEST(both.out.find("nova's pretraining steps: continuing run " + pre.string() + " from step 4") != std::string::npos,
+             both.out);
+  BOOST_TEST(both.out.find("nova's joint steps: continuing run " + joint.string() + " from step 10") != std::string::npos,
+             both.out);
+  BOOST_TEST(both.out.find("each side's best round") != std::string::npos, both.out);
+  BOOST_TEST(read_all(joint / "checkpoint.bin") == checkpoint);  // continued in a copy
+
+  const CommandResult one = run_built("nova-bench", base + "--objects 2 --run " + joint.string(), s.dir);
+  BOOST_TEST_REQUIRE(one.code == 0, one.err << one.out);
+  BOOST_TEST(one.out.find("nova's pretraining steps: the dense step") != std::string::npos, one.out);
+
+  for (const auto& [args, names] : std::vector<std::pair<std::string, std::string>>{
+           {"--objects 1 --run " + joint.string(), "with 2 objects; the NOVA code steps on"},
+           {"--objects 2 --run " + joint.string() + "," + joint.string(), "both runs are in the joint phase"}}) {
+    const CommandResult r = run_built("nova-bench", base + args, s.dir);
+    BOOST_TEST(r.code == 2, args);
+    BOOST_TEST(r.err.find(names) != std::string::npos, args << ": " << r.err);
+    BOOST_TEST(r.out.find("s/step") == std::string::npos, args);
   }
 }
 
