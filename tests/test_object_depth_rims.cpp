@@ -4,6 +4,11 @@
 #include <cmath>
 
 #include "nova/train/object_depth_rims.hpp"
+#include "nova/train/step_graphs.hpp"
+#include "nova/train/trainer.hpp"
+#include "harness.hpp"
+#include "nova/data/scene_io.hpp"
+#include "scene_test_util.hpp"
 
 using namespace nova;
 
@@ -104,6 +109,60 @@ BOOST_AUTO_TEST_CASE(radius_from_the_width) {
   BOOST_TEST(object_rim_radius(0.001, 64) == 1);  // a positive fraction keeps at least one pixel
   Frame none;
   BOOST_TEST(object_rim_disparity(none, 3).empty());  // no disparity: nothing to raise
+}
+
+// The free-space term reads a target of its own only with the option and the term on; the
+// depth term keeps the disparity as given.
+BOOST_AUTO_TEST_CASE(free_space_term_takes_its_own_target) {
+  RayGeometry geo;
+  geo.num_objects = 2;
+  geo.frames = 6;
+  geo.ndc = true;
+  geo.disparity = true;
+  TrainConfig c = preset_config("quick");
+  c.rays = 8;
+  c.samples = 4;
+  BOOST_REQUIRE(c.w_free_space > 0.0f);
+  BOOST_TEST(!build_joint_graph(c, geo)->target_free_space.valid());
+  c.object_depth_rim = 0.025f;
+  const auto g = build_joint_graph(c, geo);
+  BOOST_TEST(g->target_free_space.valid());
+  BOOST_TEST(g->target_depth.valid());
+  BOOST_TEST(g->target_free_space.id != g->target_depth.id);
+  c.w_free_space = 0.0f;
+  BOOST_TEST(!build_joint_graph(c, geo)->target_free_space.valid());
+}
+
+// The first joint step of the tiny scene from the same parameters and draws: raised targets
+// only lower the free-space penalty (the fitted depth grows with minus the disparity), and the
+// tiny scene's objects have rims the window raises, so it is lower.
+BOOST_AUTO_TEST_CASE(raised_rims_lower_the_free_space_term) {
+  LoadOptions o;
+  const Scene scene = load_scene(nova::test::cached_tiny_scene().string(), o);
+  BOOST_REQUIRE(!scene.frames[0].disparity.empty());
+  const auto first_joint_free_space = [&](float rim) {
+    TrainConfig c = preset_config("quick");
+    c.pretrain_steps = 3;
+    c.steps = 1;
+    c.augment_start = 10;
+    c.occupancy = false;
+    c.log_every = 1;
+    c.checkpoint_every = 1000;
+    c.object_depth_rim = rim;
+    nova::test::TempDir dir("depth-rims");
+    Trainer t(nova::test::runtime(), scene, c, (dir / "run").string());
+    double v = -1;
+    t.run([&](const TrainProgress& p) {
+      for (const auto& [name, value] : p.terms)
+        if (p.phase == "joint" && name == "free_space") v = value;
+    });
+    return v;
+  };
+  const double plain = first_joint_free_space(0.0f), raised = first_joint_free_space(0.05f);
+  BOOST_TEST_MESSAGE("free-space term at the first joint step: " << plain << " as given, " << raised << " raised");
+  BOOST_REQUIRE(plain > 0.0);
+  BOOST_TEST(raised >= 0.0);
+  BOOST_TEST(raised < plain);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

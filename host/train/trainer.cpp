@@ -54,7 +54,7 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
   if (config_.object_depth_rim > 0.0f && geometry_.num_objects > 0)
     for (const Frame& f : scene.frames)
-      depth_disparity_.push_back(object_rim_disparity(f, object_rim_radius(config_.object_depth_rim, f.rgb.width)));
+      rim_disparity_.push_back(object_rim_disparity(f, object_rim_radius(config_.object_depth_rim, f.rgb.width)));
   // Pretraining draws background pixels (those no object mask claims): some frame must have one.
   if (config_.pretrain_steps > 0 &&
       std::all_of(regions_.begin(), regions_.end(), [](const auto& r) { return r[0].empty(); }))
@@ -189,10 +189,11 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   exec_->set(graph_->cameras, camera_rows(cameras));
   exec_->set(graph_->target_rgb, batch.rgb);
   if (graph_->target_depth.valid()) {
-    const ImageF& disparity = depth_disparity_.empty() ? frame.disparity : depth_disparity_[drawn.frame];
-    const detail::DepthTargets d = detail::depth_targets(disparity, batch, R, augmented);
+    const detail::DepthTargets d = detail::depth_targets(frame.disparity, batch, R, augmented);
     exec_->set(graph_->target_depth, d.target);
     exec_->set(graph_->depth_valid, d.valid);
+    if (graph_->target_free_space.valid())
+      exec_->set(graph_->target_free_space, detail::depth_targets(rim_disparity_[drawn.frame], batch, R, augmented).target);
   }
   if (graph_->target_nerf_rgb.valid())
     exec_->set(graph_->target_nerf_rgb, detail::nerf_rgb_targets(frame, drawn.nerf_images, batch, N, R));
