@@ -95,7 +95,6 @@ void DisparityTargets::make() {
   const Shape shape{rays};
   target = graph->input("target_depth", shape);
   valid = graph->input("depth_valid", shape);
-  if (own_free_space) free_space = graph->input("target_free_space", shape);
 }
 
 namespace {
@@ -136,8 +135,7 @@ Objective joint_objective(const RenderedRays& r, const NovelViewTargets& targets
   if (p.free_space > 0.0f && disparity) {
     disparity->make();
     o.add("free_space",
-          free_space_loss(r.raw, r.delta, r.z, r.out.depth,
-                          disparity->own_free_space ? disparity->free_space : disparity->target, disparity->valid, targets.masks,
+          free_space_loss(r.raw, r.delta, r.z, r.out.depth, disparity->target, disparity->valid, targets.masks,
                           r.noise, p.free_space_margin, 1, p.free_space_behind, ranks),
           p.free_space);
   }

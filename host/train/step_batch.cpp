@@ -73,14 +73,14 @@ PixelBatch slice_batch(const PixelBatch& batch, size_t R, size_t a, size_t n) {
   return mine;
 }
 
-DepthTargets depth_targets(const ImageF& disparity, const PixelBatch& batch, size_t R, bool augmented) {
+DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t R, bool augmented) {
   // A warped (augmented) view has no disparity map, so its rays carry no depth term.
   DepthTargets d{std::vector<float>(R, 0.0f), std::vector<float>(R, augmented ? 0.0f : 1.0f)};
   if (!augmented)
     for (size_t r = 0; r < R; ++r) {
       const size_t x = static_cast<size_t>(batch.pixels[2 * r]);
       const size_t y = static_cast<size_t>(batch.pixels[2 * r + 1]);
-      d.target[r] = -disparity.data[y * static_cast<size_t>(disparity.width) + x];
+      d.target[r] = -frame.disparity.data[y * static_cast<size_t>(frame.disparity.width) + x];
     }
   return d;
 }

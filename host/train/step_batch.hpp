@@ -32,13 +32,12 @@ StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std:
 // Rays [first, first + count) of a batch of `rays` rays: one rank's share of the step.
 PixelBatch slice_batch(const PixelBatch& batch, size_t rays, size_t first, size_t count);
 
-// The depth terms' targets of the batch's `rays` rays: minus the frame's disparity map
-// `disparity` (the NDC depth the renderer gives grows as disparity falls), and which rays
-// carry the terms.
+// The depth term's targets of the batch's `rays` rays: minus the frame's disparity (the NDC
+// depth the renderer gives grows as disparity falls), and which rays carry the term.
 struct DepthTargets {
   std::vector<float> target, valid;
 };
-DepthTargets depth_targets(const ImageF& disparity, const PixelBatch& batch, size_t rays, bool augmented);
+DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t rays, bool augmented);
 
 // Each NeRF's target colour of every ray [nerfs, rays, 3]: from its own warped view, or the
 // frame where `nerf_images` is empty.

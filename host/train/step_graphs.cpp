@@ -36,7 +36,6 @@ PriorWeights prior_weights(const TrainConfig& c) {
 void take_objective(StepGraph& s, Objective o, const DisparityTargets& disparity) {
   s.target_depth = disparity.target;
   s.depth_valid = disparity.valid;
-  s.target_free_space = disparity.free_space;
   s.terms = std::move(o.terms);
   s.loss = o.total;
 }
@@ -85,7 +84,7 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   s->pack_static = new_select(c.occupancy, {0});
   Tensor raw = static_raw(smp.positions[0], smp.viewdirs[0], scene_field(c.field, geo), s->pack_static);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, pretrain_render_options(c.conventions));
-  DisparityTargets disparity{&g, R, {}, {}, false, {}};
+  DisparityTargets disparity{&g, R, {}, {}};
   Objective o = pretrain_objective({out, raw, smp.delta, smp.z, s->noise}, s->target_rgb, prior_weights(c),
                                    disparity_usable(geo) ? &disparity : nullptr, slice.ranks);
   s->psnr_mse = o.term("static_rgb");
@@ -135,7 +134,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   Tensor raw = stack({raw_static, raw_objects});
   const RenderOptions ro = joint_render_options(c.conventions, c.weights);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);
-  DisparityTargets disparity{&g, R, {}, {}, c.object_depth_rim > 0.0f && c.w_free_space > 0.0f, {}};
+  DisparityTargets disparity{&g, R, {}, {}};
   Objective o = joint_objective({out, raw, smp.delta, smp.z, s->noise},
                                 {s->target_rgb, s->target_masks, s->target_nerf_rgb}, c.weights, ro, c.conventions,
                                 prior_weights(c), disparity_usable(geo) ? &disparity : nullptr, s->motion,

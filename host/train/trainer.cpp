@@ -9,7 +9,6 @@
 #include "nova/model/object_samples.hpp"
 #include "nova/runtime/error.hpp"
 #include "nova/train/motion_init.hpp"
-#include "nova/train/object_depth_rims.hpp"
 #include "nova/train/pixel_batch.hpp"
 #include "train/metrics_log.hpp"
 #include "train/step_batch.hpp"
@@ -52,9 +51,6 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   if (ec) throw Error("cannot create run folder '" + run_.dir() + "': " + ec.message());
   regions_.reserve(scene.frames.size());
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
-  if (config_.object_depth_rim > 0.0f && geometry_.num_objects > 0)
-    for (const Frame& f : scene.frames)
-      rim_disparity_.push_back(object_rim_disparity(f, object_rim_radius(config_.object_depth_rim, f.rgb.width)));
   // Pretraining draws background pixels (those no object mask claims): some frame must have one.
   if (config_.pretrain_steps > 0 &&
       std::all_of(regions_.begin(), regions_.end(), [](const auto& r) { return r[0].empty(); }))
@@ -189,11 +185,9 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   exec_->set(graph_->cameras, camera_rows(cameras));
   exec_->set(graph_->target_rgb, batch.rgb);
   if (graph_->target_depth.valid()) {
-    const detail::DepthTargets d = detail::depth_targets(frame.disparity, batch, R, augmented);
+    const detail::DepthTargets d = detail::depth_targets(frame, batch, R, augmented);
     exec_->set(graph_->target_depth, d.target);
     exec_->set(graph_->depth_valid, d.valid);
-    if (graph_->target_free_space.valid())
-      exec_->set(graph_->target_free_space, detail::depth_targets(rim_disparity_[drawn.frame], batch, R, augmented).target);
   }
   if (graph_->target_nerf_rgb.valid())
     exec_->set(graph_->target_nerf_rgb, detail::nerf_rgb_targets(frame, drawn.nerf_images, batch, N, R));

@@ -102,15 +102,11 @@ struct PriorWeights {
 };
 
 // The per-ray targets of the depth and free-space priors, inputs of `graph` made on first use
-// (a graph without either prior has none): minus the disparity, and 1 where it applies. With
-// `own_free_space` the free-space prior reads a target of its own (`free_space`: the
-// disparity with the objects' rims raised, object_depth_rims.hpp).
+// (a graph without either prior has none): minus the disparity, and 1 where it applies.
 struct DisparityTargets {
   Graph* graph = nullptr;
   size_t rays = 0;
   Tensor target, valid;
-  bool own_free_space = false;
-  Tensor free_space;
   void make();
 };
 

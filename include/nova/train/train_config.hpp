@@ -54,10 +54,6 @@ struct TrainConfig : ModelConfig {
   // Weight more than the margin *behind* that depth costs free_space_behind times as much: an
   // object pushed back along the one camera's rays renders the same training image.
   float free_space_behind = 0.0f;
-  // The free-space targets inside each object's mask take the nearest disparity of the same mask
-  // within this fraction of the image width (object_depth_rims.hpp): a disparity blurred over
-  // the silhouette reads part way to the background at the rims (0: the disparity as given).
-  float object_depth_rim = 0.0f;
   // With a rigid object motion (FieldConfig::motion): weight of the trajectories' smoothness
   // (second differences of the per-frame motion, motion_smoothness).
   float w_motion_smooth = 0.0f;

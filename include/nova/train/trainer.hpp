@@ -94,7 +94,6 @@ class Trainer {
   bool profile_ = false;
   bool config_written_ = false;
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
-  std::vector<ImageF> rim_disparity_;  // per frame with object-depth-rim: the free-space targets
   // Empty-space skipping (config_.occupancy): the grids of the static and object NeRFs.
   std::unique_ptr<OccupancyEstimator> occupancy_;  // with TrainConfig::occupancy
   GradientReducer* reducer_ = nullptr;
