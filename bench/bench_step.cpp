@@ -282,8 +282,6 @@ std::string profile_of(Runtime& prt, const Scene& s, const TrainConfig& preset, 
          std::to_string(profile_steps) + " profiled steps)\n" + profiled_steps(t, warmup, profile_steps);
 }
 
-// nova's pretraining and joint rows, then one run of the NOVA code, `rounds` times; then the
-// comparison and one profile of each of nova's phases (after the rounds: no part of a timing).
 // A phase's row continued from a trained run (as step_of_run, without PyTorch): `per_step`
 // gets every timed step's seconds.
 Row run_row(Runtime& rt, const TrainedRun& tr, long warmup, long steps, const fs::path& dir,
@@ -305,6 +303,9 @@ const TrainedRun* run_in_phase(const std::vector<TrainedRun>& runs, bool joint) 
   return nullptr;
 }
 
+// nova's pretraining and joint rows, then one run of the NOVA code, `rounds` times; then the
+// comparison and one profile of each of nova's phases (after the rounds: no part of a timing).
+// A phase one of `runs` is in continues that run, in the rounds and in the profile.
 int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& preset, const std::string& name, int K,
                   long warmup, long steps, long profile_steps, AnchorRun anchor, const ScratchDir& scratch,
                   const std::vector<TrainedRun>& runs) {
@@ -359,8 +360,17 @@ int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& prese
   std::ostringstream profiles;
   if (profile_steps > 0) {
     Runtime prt(rt.info(), true);
-    for (const bool joint : {false, true})
-      profiles << profile_of(prt, s, preset, name, joint, K, warmup, profile_steps, scratch / "profile");
+    for (const bool joint : {false, true}) {
+      const TrainedRun* from = run_in_phase(runs, joint);
+      if (!from) {
+        profiles << profile_of(prt, s, preset, name, joint, K, warmup, profile_steps, scratch / "profile");
+        continue;
+      }
+      auto t = resumed_copy(prt, from->scene, from->files, from->run, scratch / "profile", warmup + profile_steps, true);
+      profiles << "\n" << name << " " << (joint ? "joint K=" + std::to_string(K) : std::string("pretrain"))
+               << ", continuing " << from->run.dir() << " (" << profile_steps << " profiled steps)\n"
+               << profiled_steps(*t, warmup, profile_steps);
+    }
   }
   std::cout << "\n" << anchor_csv(done) << profiles.str();
   if (!o.str("out").empty()) {

@@ -147,24 +147,26 @@ BOOST_AUTO_TEST_CASE(trained_runs_stand_for_their_phases, *boost::unit_test::pre
   BOOST_TEST_REQUIRE(b.code == 0, b.err);
   const std::string checkpoint = read_all(joint / "checkpoint.bin");
   const std::string base = "step --anchor " + s.anchor.string() + " --anchor-python " + s.python.string() + " --scene " +
-                           scene + " --factor 1 --presets quick --warmup 1 --steps 1 --profile-steps 0 --rounds 1 ";
+                           scene + " --factor 1 --presets quick --warmup 1 --steps 1 --rounds 1 ";
 
-  const CommandResult both = run_built("nova-bench", base + "--objects 2 --run " + pre.string() + "," + joint.string(), s.dir);
+  const CommandResult both = run_built("nova-bench", base + "--profile-steps 1 --objects 2 --run " + pre.string() + "," + joint.string(), s.dir);
   BOOST_TEST_REQUIRE(both.code == 0, both.err << both.out);
   BOOST_TEST(both.out.find("nova's pretraining steps: continuing run " + pre.string() + " from step 4") != std::string::npos,
              both.out);
   BOOST_TEST(both.out.find("nova's joint steps: continuing run " + joint.string() + " from step 10") != std::string::npos,
              both.out);
   BOOST_TEST(both.out.find("each side's best round") != std::string::npos, both.out);
+  BOOST_TEST(both.out.find("quick joint K=2, continuing " + joint.string() + " (1 profiled steps)") != std::string::npos,
+             both.out);  // the profile is of the run's steps too
   BOOST_TEST(read_all(joint / "checkpoint.bin") == checkpoint);  // continued in a copy
 
-  const CommandResult one = run_built("nova-bench", base + "--objects 2 --run " + joint.string(), s.dir);
+  const CommandResult one = run_built("nova-bench", base + "--profile-steps 0 --objects 2 --run " + joint.string(), s.dir);
   BOOST_TEST_REQUIRE(one.code == 0, one.err << one.out);
   BOOST_TEST(one.out.find("nova's pretraining steps: the dense step") != std::string::npos, one.out);
 
   for (const auto& [args, names] : std::vector<std::pair<std::string, std::string>>{
-           {"--objects 1 --run " + joint.string(), "with 2 objects; the NOVA code steps on"},
-           {"--objects 2 --run " + joint.string() + "," + joint.string(), "both runs are in the joint phase"}}) {
+           {"--profile-steps 0 --objects 1 --run " + joint.string(), "with 2 objects; the NOVA code steps on"},
+           {"--profile-steps 0 --objects 2 --run " + joint.string() + "," + joint.string(), "both runs are in the joint phase"}}) {
     const CommandResult r = run_built("nova-bench", base + args, s.dir);
     BOOST_TEST(r.code == 2, args);
     BOOST_TEST(r.err.find(names) != std::string::npos, args << ": " << r.err);
