@@ -10,7 +10,10 @@
 #                 unsplit, beside PyTorch on the same GPU where python3 has CUDA torch
 #   step.txt      nova-bench step: quick and reference, 1 and 2 objects, default synthetic scene
 #   anchor.txt    with NOVA_GPU_ANCHOR=DIR: nova-bench step --anchor DIR (nova's reference steps
-#                 and the NOVA code's, alternating on this GPU, and their ratio)
+#                 and the NOVA code's, alternating on this GPU, and their ratio); with also
+#                 NOVA_GPU_ANCHOR_TRAIN=P,J a reference run trained P pretraining steps and one
+#                 trained J joint steps after them stand for nova's side (anchor-train.txt: their
+#                 training; the steps then skip empty space as the runs' grids say)
 #   main.txt      the main job (nova synth, train --preset quick, eval), with its times
 #   eval/         its camera-0 and composition pictures
 #   render.txt    nova-bench render  ops.txt     nova-bench ops (every op at its table shape)
@@ -128,8 +131,30 @@ fi
 # With NOVA_GPU_ANCHOR=DIR (the NOVA code anchor, nova_ref, carried along): nova's reference
 # steps and the NOVA code's on Balloon1 480x270, alternating on this GPU, and their ratio.
 if [ -n "${NOVA_GPU_ANCHOR:-}" ] && ! skip anchor; then
+  anchor_runs=()
+  if [ -n "${NOVA_GPU_ANCHOR_TRAIN:-}" ]; then
+    stage "reference runs on the NOVA code's scene"
+    pre_steps=${NOVA_GPU_ANCHOR_TRAIN%,*}
+    joint_steps=${NOVA_GPU_ANCHOR_TRAIN#*,}
+    runs="$work/anchor-runs"
+    rm -rf "$runs" && mkdir -p "$runs"
+    {
+      # The reference's own occupancy settings; --steps 0 ends the first run in pretraining.
+      timeout "${NOVA_GPU_ANCHOR_TRAIN_S:-300}" "$BUILD/nova" train --preset reference \
+        --scene "$NOVA_GPU_ANCHOR/data/Balloon1" --factor 2 --out "$runs/pre" --pretrain-steps "$pre_steps" \
+        --steps 0 --log-every 250 &&
+        cp -r "$runs/pre" "$runs/joint" &&
+        timeout "${NOVA_GPU_ANCHOR_TRAIN_S:-300}" "$BUILD/nova" train --out "$runs/joint" --resume \
+          --steps "$joint_steps" --log-every 250
+      echo "exit $?"
+    } >"$OUT_DIR/anchor-train.txt" 2>&1
+    tail -3 "$OUT_DIR/anchor-train.txt"
+    if [ -f "$runs/joint/checkpoint.bin" ] && tail -1 "$OUT_DIR/anchor-train.txt" | grep -q "exit 0"; then
+      anchor_runs=(--run "$runs/pre,$runs/joint")
+    fi
+  fi
   stage "nova-bench step beside the NOVA code"
-  timeout "${NOVA_GPU_ANCHOR_S:-240}" "$BUILD/nova-bench" step --anchor "$NOVA_GPU_ANCHOR" \
+  timeout "${NOVA_GPU_ANCHOR_S:-240}" "$BUILD/nova-bench" step --anchor "$NOVA_GPU_ANCHOR" "${anchor_runs[@]}" \
     --anchor-python "$(command -v python3)" --steps 10 --warmup 3 --rounds "${NOVA_GPU_ANCHOR_ROUNDS:-2}" >"$OUT_DIR/anchor.txt" 2>&1
   echo "exit $?" >>"$OUT_DIR/anchor.txt"
   grep -vE "^ +[a-z_]+ +[0-9]" "$OUT_DIR/anchor.txt" | head -40

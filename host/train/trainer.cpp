@@ -125,8 +125,9 @@ bool Trainer::joint_phase(long step) const {
 // Builds the graph of the current step's phase; on entering the joint phase the static
 // NeRF's weights move over from pretraining and a fresh Adam starts (the phases have
 // their own optimisers, as the reference's pretraining).
-void Trainer::ensure_phase() {
-  const bool joint = joint_phase(step_);
+void Trainer::ensure_phase() { ensure_phase(joint_phase(step_)); }
+
+void Trainer::ensure_phase(bool joint) {
   if (exec_ && graph_joint_ == joint) return;
   TrainConfig local = config_;
   local.rays = config_.rays / static_cast<int>(ranks());
@@ -318,11 +319,15 @@ void Trainer::resume() {
   step_ = std::stol(ck.get("step"));
   if (step_ > total_steps())
     throw mismatch("it is at step " + std::to_string(step_) + ", beyond the configured " + std::to_string(total_steps()));
-  exec_.reset();
-  ensure_phase();
-  if (ck.get("phase") != (graph_joint_ ? "joint" : "pretrain"))
+  // A run trained with no joint steps ends in pretraining at step pretrain-steps, where a
+  // longer run is in the joint phase: its checkpoint loads into pretraining, and the next step
+  // enters the joint phase as a run that had gone on would have.
+  const bool ck_joint = ck.get("phase") == "joint";
+  if (ck_joint != joint_phase(step_) && (ck_joint || step_ != config_.pretrain_steps))
     throw mismatch("phase '" + ck.get("phase") + "' at step " + std::to_string(step_) +
                    " (pretrain-steps changed?)");
+  exec_.reset();
+  ensure_phase(ck_joint);
   for (Tensor p : graph_->graph.parameters()) {
     const CheckpointArray& a = ck.array(p.info().name);
     if (a.shape != p.shape().dims) throw mismatch("parameter '" + a.name + "' has another shape");

@@ -74,7 +74,8 @@ class Trainer {
 
  private:
   bool joint_phase(long step) const;
-  void ensure_phase();
+  void ensure_phase();           // the phase of the current step
+  void ensure_phase(bool joint);  // that phase's graph and executor
   void train_step(bool log, TrainProgress& p);
   void write_checkpoint_now();
   void write_config();
