@@ -208,40 +208,47 @@ TrainedRun trained_run(const std::string& dir, const std::string& scene_option) 
   return t;
 }
 
+// A phase's row continued from a trained run: `peer` (may be null) times PyTorch's MLPs
+// beside every step, `per_step` (may be null) gets every timed step's seconds.
+Row run_row(Runtime& rt, const TrainedRun& tr, long warmup, long steps, const fs::path& dir, TorchPeer* peer,
+            std::vector<double>* per_step) {
+  const bool joint = joint_checkpoint(tr.files);
+  auto t = resumed_copy(rt, tr.scene, tr.files, tr.run, dir, warmup + steps, false, peer || per_step ? 1 : 1000000);
+  Row r{tr.files.config.preset, joint ? "joint" : "pretrain", joint ? tr.scene.num_objects : 0, tr.files.config.rays,
+        tr.files.config.samples};
+  r.seconds = time_steps(rt, *t, warmup, steps, peer, &r.torch_seconds, per_step, &r.commands);
+  r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
+  r.rss_mb = peak_rss_mb();
+  return r;
+}
+
+// The per-op table of a trained run's next `profile_steps` steps, under `title`.
+std::string run_profile(Runtime& prt, const TrainedRun& tr, const std::string& title, long warmup, long profile_steps,
+                        const fs::path& dir) {
+  auto t = resumed_copy(prt, tr.scene, tr.files, tr.run, dir, warmup + profile_steps, true);
+  return "\n" + title + " (" + std::to_string(profile_steps) + " profiled steps)\n" +
+         profiled_steps(*t, warmup, profile_steps);
+}
+
 int step_of_run(const Options& o, long steps, long warmup, long profile_steps) {
   const TrainedRun tr = trained_run(o.str("run"), o.str("scene"));
-  const RunFolder& run = tr.run;
-  const RunFiles& files = tr.files;
-  const std::string& scene_dir = tr.scene_dir;
-  const Scene& scene = tr.scene;
   const ScratchDir scratch("step");
   Runtime rt(select_device(o.str("device")), false);
   Runtime prt(rt.info(), true);
-  const long more = warmup + std::max(steps, profile_steps);
-  Row r;
-  std::ostringstream profiles;
-  {
-    const bool joint = joint_checkpoint(files);
-    std::string why;
-    auto peer = torch_for(torch_python(o.str("torch")), files.config, 1 + (joint ? scene.num_objects : 0), why);
-    auto t = resumed_copy(rt, scene, files, run, scratch / "run", more, false, peer ? 1 : 1000000);
-    std::cout << "device " << rt.info().name << "; run " << run.dir() << " (preset " << files.config.preset
-              << ", step " << t->step() << ", " << (joint ? "joint" : "pretraining") << ") on " << scene_dir << "; "
-              << warmup << " warm-up + " << steps << " timed steps, skipping as the run's grids say\n\n";
-    if (!peer) std::cout << "PyTorch: not compared (" << why << ")\n";
-    r = Row{files.config.preset, joint ? "joint" : "pretrain", joint ? scene.num_objects : 0, files.config.rays,
-            files.config.samples};
-    r.seconds = time_steps(rt, *t, warmup, steps, peer.get(), &r.torch_seconds, nullptr, &r.commands);
-    r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
-  }
-  r.rss_mb = peak_rss_mb();
+  const bool joint = joint_checkpoint(tr.files);
+  std::string why;
+  auto peer = torch_for(torch_python(o.str("torch")), tr.files.config, 1 + (joint ? tr.scene.num_objects : 0), why);
+  std::cout << "device " << rt.info().name << "; run " << tr.run.dir() << " (preset " << tr.files.config.preset << ", step "
+            << tr.files.checkpoint.get("step") << ", " << (joint ? "joint" : "pretraining") << ") on " << tr.scene_dir
+            << "; " << warmup << " warm-up + " << steps << " timed steps, skipping as the run's grids say\n\n";
+  if (!peer) std::cout << "PyTorch: not compared (" << why << ")\n";
+  const Row r = run_row(rt, tr, warmup, steps, scratch / "run", peer.get(), nullptr);
   print_row(r);
-  if (profile_steps > 0) {
-    auto t = resumed_copy(prt, scene, files, run, scratch / "profile", more, true);
-    profiles << "\n" << r.preset << " " << r.phase << " (" << profile_steps << " profiled steps)\n"
-             << profiled_steps(*t, warmup, profile_steps);
-  }
-  write_csv({r}, o.str("out"), profiles.str());
+  const std::string profiles =
+      profile_steps > 0
+          ? run_profile(prt, tr, r.preset + " " + r.phase, warmup, profile_steps, scratch / "profile")
+          : std::string();
+  write_csv({r}, o.str("out"), profiles);
   return 0;
 }
 
@@ -280,20 +287,6 @@ std::string profile_of(Runtime& prt, const Scene& s, const TrainConfig& preset, 
   t.set_profile(true);
   return "\n" + name + " " + (joint ? "joint K=" + std::to_string(K) : std::string("pretrain")) + " (" +
          std::to_string(profile_steps) + " profiled steps)\n" + profiled_steps(t, warmup, profile_steps);
-}
-
-// A phase's row continued from a trained run (as step_of_run, without PyTorch): `per_step`
-// gets every timed step's seconds.
-Row run_row(Runtime& rt, const TrainedRun& tr, long warmup, long steps, const fs::path& dir,
-            std::vector<double>& per_step) {
-  const bool joint = joint_checkpoint(tr.files);
-  auto t = resumed_copy(rt, tr.scene, tr.files, tr.run, dir, warmup + steps, false, 1);
-  Row r{tr.files.config.preset, joint ? "joint" : "pretrain", joint ? tr.scene.num_objects : 0, tr.files.config.rays,
-        tr.files.config.samples};
-  r.seconds = time_steps(rt, *t, warmup, steps, nullptr, nullptr, &per_step, &r.commands);
-  r.device_mb = static_cast<double>(t->device_bytes()) / (1024.0 * 1024.0);
-  r.rss_mb = peak_rss_mb();
-  return r;
 }
 
 // The run of `runs` in the joint phase (or in pretraining), or null.
@@ -339,7 +332,7 @@ int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& prese
     for (const bool joint : {false, true}) {
       std::vector<double> each;
       const TrainedRun* from = run_in_phase(runs, joint);
-      rows.push_back(from ? run_row(rt, *from, warmup, steps, scratch / "run", each)
+      rows.push_back(from ? run_row(rt, *from, warmup, steps, scratch / "run", nullptr, &each)
                           : time_row(rt, s, preset, name, joint, K, warmup, steps, scratch / "run", python, told_torch,
                                      &each));
       (joint ? a.nova.joint : a.nova.pretrain) = median(each);
@@ -366,10 +359,10 @@ int beside_anchor(const Options& o, const Scene& scene, const TrainConfig& prese
         profiles << profile_of(prt, s, preset, name, joint, K, warmup, profile_steps, scratch / "profile");
         continue;
       }
-      auto t = resumed_copy(prt, from->scene, from->files, from->run, scratch / "profile", warmup + profile_steps, true);
-      profiles << "\n" << name << " " << (joint ? "joint K=" + std::to_string(K) : std::string("pretrain"))
-               << ", continuing " << from->run.dir() << " (" << profile_steps << " profiled steps)\n"
-               << profiled_steps(*t, warmup, profile_steps);
+      profiles << run_profile(prt, *from,
+                              name + " " + (joint ? "joint K=" + std::to_string(K) : std::string("pretrain")) +
+                                  ", continuing " + from->run.dir(),
+                              warmup, profile_steps, scratch / "profile");
     }
   }
   std::cout << "\n" << anchor_csv(done) << profiles.str();
@@ -468,6 +461,7 @@ int step(const Args& args) {
     if (presets.size() != 1 || objects.size() != 1)
       throw Error("--anchor compares one preset and one object count (the NOVA code's: --presets reference --objects 1)");
     std::vector<TrainedRun> runs;
+    if (o.strings("run").size() > 2) throw Error("--run: at most two runs with --anchor, one per phase");
     if (!o.str("run").empty())
       for (const std::string& dir : o.strings("run")) {
         runs.push_back(trained_run(dir, ""));
@@ -484,7 +478,6 @@ int step(const Args& args) {
         if (runs.size() == 2 && joint_checkpoint(runs[0].files) == joint_checkpoint(runs[1].files))
           throw Error("--run: both runs are in the " + std::string(joint_checkpoint(r.files) ? "joint" : "pretraining") +
                       " phase; give at most one run per phase");
-        if (runs.size() > 2) throw Error("--run: at most two runs with --anchor, one per phase");
       }
     return beside_anchor(o, scene, presets[0], preset_list[0], objects[0], warmup, steps, profile_steps, anchor, scratch,
                          runs);
