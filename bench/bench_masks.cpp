@@ -148,6 +148,7 @@ int masks(const Args& args) {
                          {"threshold-floor", text(opt.threshold_floor)},
                          {"threshold-mads", text(opt.threshold_mads)},
                          {"min-area", text(opt.min_area)},
+                         {"peel-radius", text(opt.peel_radius)},
                          {"depth-search", text(opt.depth_search)},
                          {"grow-depth", text(opt.grow_depth)},
                          {"grow-limit", text(opt.grow_limit)},
@@ -170,6 +171,7 @@ int masks(const Args& args) {
   opt.threshold_floor = std::stod(o.str("threshold-floor"));
   opt.threshold_mads = std::stod(o.str("threshold-mads"));
   opt.min_area = std::stod(o.str("min-area"));
+  opt.peel_radius = std::stod(o.str("peel-radius"));
   opt.depth_search = std::stod(o.str("depth-search"));
   opt.grow_depth = std::stod(o.str("grow-depth"));
   opt.grow_limit = std::stod(o.str("grow-limit"));

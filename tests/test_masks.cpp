@@ -1,6 +1,6 @@
 // nova masks (include/nova/masks/motion_masks.hpp): the reprojection against a float64
 // reference, the masks of the tiny synthetic scene against its exact masks, the growth over
-// the depth's surfaces, the hole filling and the tracking of crossing objects on made-up
+// the depth's surfaces, the hole filling, the peel of blurred-depth background and the tracking of crossing objects on made-up
 // regions and depths, and bad input
 // (missing disparity or poses, a static video, nothing left behind on failure).
 #include <boost/test/unit_test.hpp>
@@ -108,7 +108,7 @@ BOOST_AUTO_TEST_CASE(tiny_scene_masks_match_exact_masks) {
   }
   BOOST_TEST_MESSAGE("tiny scene: " << m.objects() << " objects, mean IoU " << mean);
   BOOST_TEST(!m.nothing_moves);
-  // Measured 0.74 (frames 5-9 above 0.95; in frames 0-4 the two objects overlap and GrabCut
+  // Measured 0.73 (frames 5-9 above 0.95; in frames 0-4 the two objects overlap and GrabCut
   // at 64x48 takes the sphere's shadowed side for background). The bound leaves 0.09 for
   // other compilers' and OpenCV builds' rounding in the fit, the threshold and GrabCut.
   BOOST_TEST(mean >= 0.65);
@@ -173,6 +173,70 @@ BOOST_AUTO_TEST_CASE(holes_behind_the_region_stay_open) {
   BOOST_TEST(cv::countNonZero(nova::masks::clean_region(ring, 4) != filled) == 0);
   w(cv::Rect(25, 25, 10, 10)).setTo(0.79);  // 1 % behind: within the 5 %, the object's own middle
   BOOST_TEST(cv::countNonZero(nova::masks::clean_region(ring, 4, w) != filled) == 0);
+}
+
+// A rod in front of a textured wall, seen by a camera sliding along x (5 frames, 96 x 48,
+// f = 100): the wall at inverse depth 0.5, the rod (8 pixels wide) at 1.0, moving 0.1 units a
+// frame. The middle frame's region is the rod and a band of 4 pixels of wall on either side
+// whose inverse depth a blur carried to 0.75. Placed at the wall's depth beside the region, the
+// band matches the neighbours and is peeled; the rod does not (it moved) and stays whole.
+// Only depth errors are mended: a band at the wall's own depth, and a rod that stands still (a
+// part that hardly moves, in a region by growth; at the wall's depth its inside would land on
+// its own plain colour and match), match at their own depths and stay.
+BOOST_AUTO_TEST_CASE(peel_drops_background_with_a_blurred_depth_and_keeps_the_rod) {
+  const int W = 96, H = 48, n = 5, band = 4;
+  auto wall = [](double X, double Y) {  // smooth and unambiguous over the frame
+    return cv::Vec3f(float(0.5 + 0.3 * std::sin(3.1 * X + 0.4) * std::cos(2.3 * Y)),
+                     float(0.5 + 0.3 * std::sin(1.7 * X - 2.9 * Y)), float(0.5 + 0.25 * std::cos(2.2 * X + 1.3 * Y)));
+  };
+  const cv::Vec3f rod(0.9f, 0.15f, 0.1f);
+  auto make_frames = [&](bool blurred, double speed) {
+    std::vector<nova::masks::FrameData> frames(n);
+    for (int i = 0; i < n; ++i) {
+      nova::masks::FrameData& f = frames[size_t(i)];
+      f.camera.width = W, f.camera.height = H;
+      f.camera.fx = f.camera.fy = 100, f.camera.cx = W / 2.0, f.camera.cy = H / 2.0;
+      f.camera.c2w[3] = 0.05 * i;
+      const double rod_x = -0.08 + 0.1 + speed * (i - 2);  // the rod's left side, world x
+      f.rgb.create(H, W, CV_32FC3);
+      f.inv_depth.create(H, W, CV_32F);
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          const double u = (x - f.camera.cx) / 100.0, v = -(y - f.camera.cy) / 100.0;
+          const double rx = f.camera.c2w[3] + u;  // where the pixel meets the rod's plane (depth 1)
+          const bool on_rod = rx >= rod_x && rx < rod_x + 0.08;
+          f.rgb.at<cv::Vec3f>(y, x) = on_rod ? rod : wall(f.camera.c2w[3] + 2 * u, 2 * v);
+          f.inv_depth.at<float>(y, x) = on_rod ? 1.0f : 0.5f;
+        }
+    }
+    cv::Mat rod_mask = frames[2].inv_depth > 0.9f, region;
+    cv::dilate(rod_mask, region, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * band + 1, 1)));
+    if (blurred) frames[2].inv_depth.setTo(0.75f, region & ~rod_mask);
+    return std::make_tuple(frames, rod_mask, region);
+  };
+  MotionMaskOptions o;
+  o.offsets = {1, 2};
+  o.match_radius = 1;
+  o.peel_radius = 6.0 / W;
+  struct Case {
+    const char* name;
+    bool blurred;
+    double speed;
+  };
+  for (const Case c : {Case{"moving rod, blurred band", true, 0.1}, Case{"moving rod, exact band", false, 0.1},
+                       Case{"still rod, exact band", false, 0.0}}) {
+    auto [frames, rod_mask, region] = make_frames(c.blurred, c.speed);
+    const cv::Mat peeled = nova::masks::peel_background(frames, 2, region, 0.5, o);
+    const int rod_px = cv::countNonZero(rod_mask), band_px = cv::countNonZero(region & ~rod_mask);
+    BOOST_TEST_REQUIRE(rod_px == 8 * H);
+    BOOST_TEST(cv::countNonZero(peeled & rod_mask) == rod_px, c.name << ": the rod whole");
+    const int band_left = cv::countNonZero(peeled & ~rod_mask);
+    BOOST_TEST_MESSAGE(c.name << ": band " << band_left << " of " << band_px << " kept");
+    // Blurred: every band pixel but those whose neighbours see the rod where the wall point
+    // lies (occluded in both) is peeled; 90 % leaves room for those. Exact: none is peeled.
+    if (c.blurred) BOOST_TEST(band_left <= band_px / 10, c.name);
+    else BOOST_TEST(band_left == band_px, c.name);
+  }
 }
 
 // Two discs crossing the image in opposite directions, the right-to-left one in front (nearer:

@@ -55,16 +55,38 @@ std::vector<int> neighbours(int i, int n, const std::vector<int>& offsets);
 // inv_depth of every frame from its disparity and the fit.
 void apply_depth(std::vector<FrameData>& frames, const DepthFit& fit);
 
+// The score of frame i's pixels against its neighbours (options.offsets): operator() at a given
+// inverse depth (-1 where no neighbour sees the point), best() the lowest over the depths
+// searched about the fitted one.
+class PixelScorer {
+ public:
+  PixelScorer(const std::vector<FrameData>& frames, int i, const MotionMaskOptions& options);
+  double operator()(int x, int y, double inv_depth) const;
+  double best(int x, int y) const;
+
+ private:
+  const FrameData& frame_;
+  const MotionMaskOptions& options_;
+  std::vector<std::pair<const FrameData*, PairGeometry>> views_;
+  int radius_ = 1;
+  mutable std::vector<float> per_;
+};
+
 // The raw per-pixel motion score of frame i (CV_32F).
 cv::Mat motion_score(const std::vector<FrameData>& frames, int i, const MotionMaskOptions& options);
+// `region` of frame i without the pixels that are motion at their own depth but match their
+// neighbours when placed at the farthest depth outside the region within options.peel_radius
+// (a fraction of the width): background whose disparity a blur carried towards the object's.
+cv::Mat peel_background(const std::vector<FrameData>& frames, int i, const cv::Mat& region, double threshold,
+                        const MotionMaskOptions& options);
 
 // The threshold from the smoothed scores of all frames.
 double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptions& options,
                        std::vector<std::string>& notes);
-// The moving region of one frame (CV_8U, 255 inside): threshold, clean-up, growth over the
-// depth's smooth surfaces (options.grow_depth), GrabCut.
-cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame, const cv::Mat& inv_depth,
-                      const MotionMaskOptions& options);
+// The moving region of frame i (CV_8U, 255 inside): threshold, clean-up, peel_background,
+// growth over the depth's smooth surfaces (options.grow_depth), GrabCut.
+cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame,
+                      const std::vector<FrameData>& frames, int i, const MotionMaskOptions& options);
 // Each connected part of `region` grown over pixels whose inverse depth changes by less than
 // `step` (relative) from pixel to pixel, unless it would grow past `max_growth` times its area.
 cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double step, double max_growth);

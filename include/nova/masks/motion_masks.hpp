@@ -15,7 +15,9 @@
 //    one neighbour's occlusion or glare does not look like motion.
 // 3. Masks: the score, smoothed, above a threshold taken from its own distribution (a robust
 //    noise level, never below an absolute floor), cleaned (small regions dropped, holes filled
-//    unless their depth lies behind the region: background seen through the object), grown
+//    unless their depth lies behind the region: background seen through the object), peeled
+//    (a pixel that is motion at its depth but matches at the background's depth beside the
+//    region is background under a disparity blurred towards the object), grown
 //    over the depth's smooth surfaces where that stays bounded (the parts of a moving object
 //    that hardly move) and its edges moved to the image's colour edges (OpenCV's GrabCut, which
 //    may not add pixels behind the region).
@@ -46,6 +48,9 @@ struct MotionMaskOptions {
   double grow_depth = 0.005;             // relative inverse-depth step the region grows over (0: off)
   double grow_limit = 6.0;               // a part that would add more than this many times its
                                          // area (or a quarter of the frame) does not grow
+  double peel_radius = 0.03;             // fraction of the width: a region's pixels that are motion
+                                         // at their depth but match at the farthest depth this near
+                                         // outside the region are background (0: off)
   double min_area = 0.002;               // regions smaller than this fraction of a frame drop
   double min_track_frames = 0.15;        // a track is an object in this fraction of frames (and 2)
   bool grabcut = true;                   // refine edges on the image
