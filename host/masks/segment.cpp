@@ -177,7 +177,8 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
     const cv::Mat behind = inv_depth < double(ws[ws.size() / 10]) * 0.95;
     out.setTo(0, behind & ~region);
   }
-  cv::morphologyEx(out, out, cv::MORPH_OPEN, k3);
+  // No opening here: it erases whatever is under 3 px wide (a thin rod's whole mask); GrabCut's
+  // specks go with the small regions.
   return clean_region(out, min_pixels, inv_depth);
 }
 
