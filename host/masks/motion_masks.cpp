@@ -92,9 +92,8 @@ MotionMasks make_motion_masks(const Scene& scene, const MotionMaskOptions& optio
   report(options, out.notes.back());
 
   std::vector<cv::Mat> regions;
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < n; ++i)
     regions.push_back(masks::moving_region(scores[size_t(i)], out.threshold, scene.frames[size_t(i)].rgb, frames, i, options));
-  }
   {
     char line[96];
     std::snprintf(line, sizeof line, "regions: %d frames (%.1f s)", n, seconds());
