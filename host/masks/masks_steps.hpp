@@ -68,6 +68,7 @@ class PixelScorer {
   const FrameData& frame_;
   const MotionMaskOptions& options_;
   std::vector<std::pair<const FrameData*, PairGeometry>> views_;
+  std::vector<double> factors_;  // of the fitted inverse depth, searched by best()
   int radius_ = 1;
   mutable std::vector<float> per_;
 };

@@ -2,6 +2,8 @@
 // fail to match the neighbouring frames where those see them.
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
 
 #include "masks/masks_steps.hpp"
 
@@ -11,6 +13,12 @@ PixelScorer::PixelScorer(const std::vector<FrameData>& frames, int i, const Moti
     : frame_(frames[size_t(i)]), options_(options) {
   for (int j : neighbours(i, int(frames.size()), options.offsets))
     views_.push_back({&frames[size_t(j)], pair_geometry(frame_.camera, frames[size_t(j)].camera)});
+  // Inverse depths tried per pixel: the fitted one times 1 + r for r in [-range, range], so
+  // that a disparity wrong by a few percent (a monocular network's) is not motion; the same
+  // depth for every neighbour, which a moving point does not fit.
+  const int steps = options.depth_search > 0 ? 2 * options.depth_search_steps + 1 : 1;
+  for (int k = 0; k < steps; ++k)
+    factors_.push_back(steps == 1 ? 1.0 : 1.0 + options.depth_search * (2.0 * k / (steps - 1) - 1.0));
   const int w = frame_.rgb.cols;
   radius_ = options.match_radius > 0 ? options.match_radius : std::max(1, int(std::lround(w / 240.0)));
 }
@@ -54,14 +62,9 @@ double PixelScorer::operator()(int x, int y, double inv_depth) const {
 }
 
 double PixelScorer::best(int x, int y) const {
-  // Inverse depths tried per pixel: the fitted one times 1 + r for r in [-range, range], so
-  // that a disparity wrong by a few percent (a monocular network's) is not motion; the same
-  // depth for every neighbour, which a moving point does not fit.
-  const int steps = options_.depth_search > 0 ? 2 * options_.depth_search_steps + 1 : 1;
   const double w = frame_.inv_depth.at<float>(y, x);
   double out = -1;
-  for (int k = 0; k < steps; ++k) {
-    const double factor = steps == 1 ? 1.0 : 1.0 + options_.depth_search * (2.0 * k / (steps - 1) - 1.0);
+  for (double factor : factors_) {
     const double s = (*this)(x, y, w * factor);
     if (s >= 0 && (out < 0 || s < out)) out = s;
   }
@@ -85,26 +88,26 @@ cv::Mat peel_background(const std::vector<FrameData>& frames, int i, const cv::M
   const FrameData& f = frames[size_t(i)];
   const PixelScorer scorer(frames, i, options);
   const int r = std::max(1, int(std::lround(options.peel_radius * f.rgb.cols)));
+  // The farthest surface outside the region within r pixels (a disc): the background a pixel
+  // at the region's edge would be, were its disparity blurred towards the object's. A minimum
+  // filter over the inverse depth with the region's pixels out of reach (+inf); +inf where no
+  // outside pixel is that near.
+  cv::Mat disc(2 * r + 1, 2 * r + 1, CV_8U, cv::Scalar(0));
+  for (int dy = -r; dy <= r; ++dy)
+    for (int dx = -r; dx <= r; ++dx)
+      if (dx * dx + dy * dy <= r * r) disc.at<uint8_t>(dy + r, dx + r) = 1;
+  cv::Mat outside = f.inv_depth.clone(), far;
+  outside.setTo(std::numeric_limits<float>::infinity(), region);
+  cv::erode(outside, far, disc);
   cv::Mat out = region.clone();
   for (int y = 0; y < region.rows; ++y)
     for (int x = 0; x < region.cols; ++x) {
-      if (!region.at<uint8_t>(y, x)) continue;
-      // The farthest surface outside the region within r pixels: the background a pixel at the
-      // region's edge would be, were its disparity blurred towards the object's.
-      float far = -1;
-      for (int dy = -r; dy <= r; ++dy)
-        for (int dx = -r; dx <= r; ++dx) {
-          const int xx = x + dx, yy = y + dy;
-          if (xx < 0 || yy < 0 || xx >= region.cols || yy >= region.rows || dx * dx + dy * dy > r * r) continue;
-          if (region.at<uint8_t>(yy, xx)) continue;
-          const float w = f.inv_depth.at<float>(yy, xx);
-          if (far < 0 || w < far) far = w;
-        }
-      if (far < 0 || far >= f.inv_depth.at<float>(y, x)) continue;
+      const float w_far = far.at<float>(y, x);
+      if (!region.at<uint8_t>(y, x) || !(w_far < f.inv_depth.at<float>(y, x))) continue;
       // Only a pixel that is motion at its own depth can be a depth error: one that matched
       // there joined the region for other reasons (the score's blur, a filled hole).
       if (scorer.best(x, y) < threshold) continue;
-      const double s = scorer(x, y, far);
+      const double s = scorer(x, y, w_far);
       if (s >= 0 && s < threshold) out.at<uint8_t>(y, x) = 0;
     }
   return out;
