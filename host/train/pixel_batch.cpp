@@ -34,20 +34,19 @@ namespace {
 // of the mask's edge, and its largest value (the mask dilated by the band).
 struct EdgeWindow {
   bool edge = false;
-  uint8_t largest = 0, smallest = 255;
+  uint8_t largest = 0;
 };
 
 EdgeWindow edge_window(const Image8& mask, int x, int y, int band) {
   bool inside = false, outside = false;
-  uint8_t largest = 0, smallest = 255;
+  uint8_t largest = 0;
   for (int v = std::max(0, y - band); v <= std::min(mask.height - 1, y + band); ++v)
     for (int u = std::max(0, x - band); u <= std::min(mask.width - 1, x + band); ++u) {
       const uint8_t m = mask.at(u, v);
       largest = std::max(largest, m);
-      smallest = std::min(smallest, m);
       (m >= 128 ? inside : outside) = true;
     }
-  return {inside && outside, largest, smallest};
+  return {inside && outside, largest};
 }
 
 }  // namespace
@@ -86,7 +85,6 @@ PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
     b.alpha_masks = b.masks;
     for (size_t i = 0; i < R; ++i) {
       const int x = static_cast<int>(b.pixels[i * 2]), y = static_cast<int>(b.pixels[i * 2 + 1]);
-      b.alpha_masks[i] = edge_window(masks[0], x, y, edge_band).smallest / 255.0f;
       for (size_t m = 1; m < N; ++m) {
         const EdgeWindow e = edge_window(masks[m], x, y, edge_band);
         if (e.edge) b.mask_weight[i] = 0.0f;

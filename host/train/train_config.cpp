@@ -220,9 +220,6 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("mask-edge-band", "joint training: pixels within this many pixels of an object mask's edge (either side) are not held to the mask: no mask loss there, and the alpha loss lets each object's density reach that far past its mask (0: every pixel held to it)", 0, 64,
                          [](TrainConfig& c) -> int& { return c.mask_edge_band; }));
   o.back().before = "0";
-  o.push_back(bool_option("mask-edge-static", "mask-edge-band > 0 with static-background-only: the static NeRF learns only from background pixels outside every object's band",
-                          [](TrainConfig& c) -> bool& { return c.mask_edge_static; }));
-  o.back().before = "false";
   o.push_back(convention_option("mask-loss", "mask loss: mse (mean square over NeRFs and rays) or l1 (per NeRF the mean |M_n - m_n| over rays, summed: the reference code's)",
                                 "mse", "l1", [](TrainConfig& c) -> bool& { return c.conventions.mask_l1; }));
   o.push_back(convention_option("nerf-rgb-loss", "per-NeRF RGB loss: mean (masked square error over N R 3, one target colour) or area (per NeRF over its mask's area, each NeRF against its own, on augmented steps warped, view: the reference code's)",

@@ -20,8 +20,7 @@ struct PixelBatch {
   std::vector<float> masks;   // [N, R] in [0, 1]; masks[0] = background
   std::vector<int> region_rays;  // rays drawn from each region (background, objects)
   // With an edge band (draw_pixels): [R] 0 for a ray within the band of an object mask's edge,
-  // else 1; [N, R] the objects' masks dilated by the band and the background's (masks[0])
-  // eroded by it. Empty without a band.
+  // else 1; [N, R] the masks dilated by the band (masks[0] as it is). Empty without a band.
   std::vector<float> mask_weight, alpha_masks;
 };
 

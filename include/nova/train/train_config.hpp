@@ -39,9 +39,6 @@ struct TrainConfig : ModelConfig {
   // A mask traced by hand or by a network is rarely right to the pixel at the edge (0: every
   // pixel is held to the mask, as in the reference).
   int mask_edge_band = 0;
-  // With the band and static_background_only: the static NeRF learns only from background
-  // pixels outside every object's band (an eroded mask leaves object pixels just outside it).
-  bool mask_edge_static = false;
   // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
   // public reference code's (reference); docs/training.md, "Loss conventions".
   LossConventions conventions;
