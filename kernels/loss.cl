@@ -32,31 +32,6 @@ __kernel void sq_err_backward(__global const float* pred, __global const float* 
   grad[i] = accumulate ? grad[i] + g : g;
 }
 
-// The same sums with a weight per element, periodic in `period`: weight[e % period] (the mask
-// loss's per-ray weights, shared by the NeRFs' rows).
-__kernel void weighted_sq_err_partial(__global const float* pred, __global const float* target,
-                                      __global const float* weight, __global float* partial,
-                                      uint n, uint period, uint parts) {
-  const uint i = get_global_id(0);
-  if (i >= parts) return;
-  float s = 0.0f;
-  for (uint e = i; e < n; e += parts) {
-    const float d = pred[e] - target[e];
-    s += weight[e % period] * d * d;
-  }
-  partial[i] = s;
-}
-
-__kernel void weighted_sq_err_backward(__global const float* pred, __global const float* target,
-                                       __global const float* weight, __global const float* gloss,
-                                       __global float* grad, uint n, uint period, float scale,
-                                       int accumulate) {
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  const float g = gloss[0] * scale * weight[i % period] * (pred[i] - target[i]);
-  grad[i] = accumulate ? grad[i] + g : g;
-}
-
 // A weighted sum of scalars, eight terms a launch (a step's loss has a dozen): out[0] (+)=
 // w0 x0[0] + w1 x1[0] + ... over the first n terms, added in order. Unused term arguments may
 // repeat a used buffer.

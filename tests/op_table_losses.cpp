@@ -1,4 +1,4 @@
-// The op table's losses of rendered values: mse, weighted_mse and weighted_sum; the novel-view terms alone
+// The op table's losses of rendered values: mse and weighted_sum; the novel-view terms alone
 // (masked_mse, blending_loss, alpha_loss) and together (with mse, summed by weighted_sum); the
 // reference code's terms (mask_l1_loss, masked_mse_area, alpha_loss_outside, order_loss); over
 // 1009 rays (several work-groups, a partial last one) and small cases. The losses along rays
@@ -50,49 +50,6 @@ OpEntry mse_entry() {
   };
   e.fd = GradCheckOptions{};
   e.flops = [](const OpShape& s) { return double(s.dims[0]) * 6; };
-  return e;
-}
-
-OpEntry weighted_mse_entry() {
-  OpEntry e;
-  e.name = "weighted_mse";
-  // dims {N, R}: an [N, R] prediction and target, R weights repeating along the N rows (the
-  // mask loss's per-ray weights). 3 x 1009: several reduction parts, the last partial; weights
-  // of 0, 1 and in between. 1 x 1: a single element.
-  OpShape big{{3, 1009}, 0, "3 x 1009"};
-  big.fd = GradCheckOptions{};
-  big.fd->max_components = 24;
-  e.shapes = {big, {{1, 1}, 0, "1 x 1"}, {{2, 37}, 0, "2 x 37"}};
-  e.build = [](Graph& g, const OpShape& s) {
-    const Shape shape{s.dims[0], s.dims[1]};
-    Tensor p = g.input("pred", shape, true), t = g.input("target", shape, true), w = g.input("weight", Shape{s.dims[1]});
-    Tensor l = weighted_mse(p, t, w);
-    return OpGraph{{p, t, w}, {l}, l};
-  };
-  e.values = [](const OpShape& s) {
-    auto w = random_floats(s.dims[1], 0, 1, 75);
-    for (float& x : w) x = x < 0.3f ? 0.0f : x < 0.7f ? 1.0f : x;
-    if (s.dims[1] == 1) w[0] = 0.5f;
-    return std::vector<std::vector<float>>{random_floats(s.dims[0] * s.dims[1], -2, 2, 73),
-                                           random_floats(s.dims[0] * s.dims[1], -2, 2, 74), w};
-  };
-  const auto weight = [](const OpCase& c, size_t i) { return double(c.values[2][i % c.values[2].size()]); };
-  e.reference = [weight](const OpCase& c) {
-    const auto& v = c.values;
-    double ref = 0;
-    for (size_t i = 0; i < v[0].size(); ++i) ref += weight(c, i) * (double(v[0][i]) - v[1][i]) * (double(v[0][i]) - v[1][i]);
-    // Two-stage float32 sums of O(1) terms, as mse: relative error well under 1e-5.
-    return std::vector<Expected>{{{ref / double(v[0].size())}, {0, 1e-5}}};
-  };
-  e.gradient = [weight](const OpCase& c) {
-    const auto& v = c.values;
-    std::vector<double> dp(v[0].size()), dt(dp.size());
-    for (size_t i = 0; i < dp.size(); ++i)
-      dt[i] = -(dp[i] = 2.0 * weight(c, i) * (double(v[0][i]) - v[1][i]) / double(dp.size()));
-    return std::vector<Expected>{grad_expected(dp), grad_expected(dt), {}};
-  };
-  e.fd = GradCheckOptions{};
-  e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1]) * 7; };
   return e;
 }
 
@@ -436,7 +393,6 @@ OpEntry reference_losses_from_sums_entry() {
 
 void register_loss_ops(std::vector<OpEntry>& t) {
   t.push_back(mse_entry());
-  t.push_back(weighted_mse_entry());
   t.push_back(weighted_sum_entry());
   t.push_back(masked_mse_entry());
   t.push_back(blending_loss_entry());

@@ -1,9 +1,6 @@
 // A training step's pixel regions and draws (pixel_batch.hpp): the regions against a
-// brute-force reading of the masks, how the rays are shared among them, and the band about
-// the masks' edges.
-#include <algorithm>
+// brute-force reading of the masks, and how the rays are shared among them.
 #include <boost/test/unit_test.hpp>
-#include <cstdlib>
 #include <set>
 
 #include "nova/train/pixel_batch.hpp"
@@ -79,49 +76,6 @@ BOOST_AUTO_TEST_CASE(regions_share_the_rays) {
   empty[0] = Image8(kW, kH, 1, 255);
   std::mt19937 again(7);
   BOOST_TEST(draw_pixels(rgb, empty, pixel_regions(empty), 10, again).region_rays == std::vector<int>({10, 0, 0}));
-}
-
-// The edge band: a ray weighs 0 for the mask loss when some object's mask changes within
-// `band` pixels (Chebyshev) of its pixel, and the alpha loss's masks are each object's mask
-// dilated by the band, against a reading of every pixel's neighbourhood by distance. The band
-// changes no draw; without it both are empty.
-BOOST_AUTO_TEST_CASE(edge_band_weighs_rays_near_a_mask_edge) {
-  const std::vector<Image8> m = masks();
-  const Image8 rgb = picture();
-  const auto regions = pixel_regions(m);
-  std::mt19937 plain_rng(11);
-  const PixelBatch plain = draw_pixels(rgb, m, regions, 600, plain_rng);
-  BOOST_TEST(plain.mask_weight.empty());
-  BOOST_TEST(plain.alpha_masks.empty());
-  for (int band : {1, 2}) {
-    std::mt19937 rng(11);
-    const PixelBatch b = draw_pixels(rgb, m, regions, 600, rng, band);
-    BOOST_TEST(b.pixels == plain.pixels);
-    BOOST_TEST(b.masks == plain.masks);
-    BOOST_TEST_REQUIRE(b.mask_weight.size() == 600u);
-    BOOST_TEST_REQUIRE(b.alpha_masks.size() == 3u * 600u);
-    int near = 0, interior = 0;
-    for (size_t r = 0; r < 600; ++r) {
-      const int x = static_cast<int>(b.pixels[r * 2]), y = static_cast<int>(b.pixels[r * 2 + 1]);
-      bool edge = false;
-      for (size_t o = 1; o < m.size(); ++o) {
-        uint8_t dilated = 0;
-        for (int v = 0; v < kH; ++v)
-          for (int u = 0; u < kW; ++u)
-            if (std::abs(u - x) <= band && std::abs(v - y) <= band) {
-              dilated = std::max(dilated, m[o].at(u, v));
-              edge = edge || (m[o].at(u, v) >= 128) != (m[o].at(x, y) >= 128);
-            }
-        BOOST_TEST(b.alpha_masks[o * 600 + r] == dilated / 255.0f, "object " << o << " at " << x << ", " << y);
-      }
-      BOOST_TEST(b.alpha_masks[r] == b.masks[r]);
-      BOOST_TEST(b.mask_weight[r] == (edge ? 0.0f : 1.0f), "ray at " << x << ", " << y << ", band " << band);
-      (edge ? near : interior) += owner(m, x, y) == 1;
-    }
-    // The 4 x 3 block keeps two interior pixels at band 1 and none at band 2.
-    BOOST_TEST(near > 0);
-    BOOST_TEST((interior > 0) == (band == 1));
-  }
 }
 
 BOOST_AUTO_TEST_SUITE_END()

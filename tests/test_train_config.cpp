@@ -101,28 +101,4 @@ BOOST_AUTO_TEST_CASE(a_run_written_before_an_option_existed_keeps_its_behaviour)
   BOOST_TEST(format_config(now) == format_config(preset_config("quick")));
 }
 
-// The mask edge band weighs the mse mask loss's rays; with the reference code's l1 mask loss
-// it is refused by name, and an older run without the key reads 0 (every pixel held to its mask).
-BOOST_AUTO_TEST_CASE(the_mask_edge_band_needs_the_mse_mask_loss) {
-  TrainConfig c = preset_config("quick");
-  set_config_value(c, "mask-edge-band", "2");
-  BOOST_TEST(c.mask_edge_band == 2);
-  validate(c);
-  set_config_value(c, "mask-loss", "l1");
-  try {
-    validate(c);
-    BOOST_FAIL("mask-edge-band with the l1 mask loss was accepted");
-  } catch (const Error& e) {
-    const std::string what = e.what();
-    BOOST_TEST(what.find("mask-edge-band") != std::string::npos, what);
-    BOOST_TEST(what.find("mask-loss") != std::string::npos, what);
-  }
-  BOOST_CHECK_THROW(set_config_value(c, "mask-edge-band", "-1"), Error);
-  std::string text = format_config(preset_config("quick"));
-  const size_t at = text.find("\nmask-edge-band = ");
-  BOOST_REQUIRE(at != std::string::npos);
-  text.erase(at + 1, text.find('\n', at + 1) - at);
-  BOOST_TEST(parse_config_text(text, "config.ini", nullptr, ConfigFile::RunFile).mask_edge_band == 0);
-}
-
 BOOST_AUTO_TEST_SUITE_END()

@@ -8,23 +8,16 @@
 namespace nova {
 namespace {
 
-// period 0: plain; else inputs (pred, target, weight) with weight[i % period].
 class MseOp final : public Op {
  public:
-  explicit MseOp(size_t n, size_t period = 0) : n_(n), period_(period), parts_(detail::reduction_parts(n)) {}
-  std::string type() const override { return period_ ? "weighted_mse" : "mse"; }
+  explicit MseOp(size_t n) : n_(n), parts_(detail::reduction_parts(n)) {}
+  std::string type() const override { return "mse"; }
 
   void forward(ExecContext& ctx) override {
     const unsigned n = detail::u32(n_, "mse size"), parts = detail::u32(parts_, "parts");
-    if (period_)
-      ctx.launch("loss", "weighted_sq_err_partial")
-          .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(ctx.workspace()).arg(n)
-          .arg(detail::u32(period_, "weights")).arg(parts)
-          .run(parts_);
-    else
-      ctx.launch("loss", "sq_err_partial")
-          .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.workspace()).arg(n).arg(parts)
-          .run(parts_);
+    ctx.launch("loss", "sq_err_partial")
+        .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.workspace()).arg(n).arg(parts)
+        .run(parts_);
     ctx.launch("loss", "sum_finish")
         .arg(ctx.workspace()).arg(ctx.out(0)).arg(parts).arg(1.0f / static_cast<float>(n_))
         .run(1);
@@ -34,21 +27,12 @@ class MseOp final : public Op {
     cl_mem gl = ctx.grad_out(0);
     if (!gl) return;
     const float scale = 2.0f / static_cast<float>(n_);
-    for (size_t i = 0; i < 2; ++i) {
-      cl_mem g = ctx.grad_in(i);
-      if (!g) continue;
-      if (period_)
-        ctx.launch("loss", "weighted_sq_err_backward")
-            .arg(ctx.in(0)).arg(ctx.in(1)).arg(ctx.in(2)).arg(gl).arg(g).arg(detail::u32(n_, "mse size"))
-            .arg(detail::u32(period_, "weights")).arg(i == 0 ? scale : -scale)
-            .arg(static_cast<int>(ctx.accumulate_in(i)))
-            .run(n_);
-      else
+    for (size_t i = 0; i < 2; ++i)
+      if (cl_mem g = ctx.grad_in(i))
         ctx.launch("loss", "sq_err_backward")
             .arg(ctx.in(0)).arg(ctx.in(1)).arg(gl).arg(g).arg(detail::u32(n_, "mse size"))
             .arg(i == 0 ? scale : -scale).arg(static_cast<int>(ctx.accumulate_in(i)))
             .run(n_);
-    }
   }
 
   std::vector<TensorId> saved_for_backward() const override { return inputs(); }
@@ -57,7 +41,7 @@ class MseOp final : public Op {
   }
 
  private:
-  size_t n_, period_, parts_;
+  size_t n_, parts_;
 };
 
 class WeightedSumOp final : public Op {
@@ -120,23 +104,6 @@ Tensor mse(Tensor pred, Tensor target) {
   Graph& g = *pred.graph;
   Tensor y = g.activation(pred.info().name + ".mse", Shape{1});
   g.add(std::make_unique<MseOp>(pred.shape().numel()), {pred, target}, {y});
-  return y;
-}
-
-Tensor weighted_mse(Tensor pred, Tensor target, Tensor weight) {
-  const size_t n = pred.shape().numel(), period = weight.shape().numel();
-  if (!(pred.shape() == target.shape()))
-    throw Error("weighted_mse: prediction " + pred.shape().str() + " and target " + target.shape().str() +
-                    " differ",
-                kExitInternal);
-  if (period == 0 || n % period != 0)
-    throw Error("weighted_mse: " + std::to_string(period) + " weights do not repeat along prediction " +
-                    pred.shape().str(),
-                kExitInternal);
-  detail::require_data("weighted_mse", weight);
-  Graph& g = *pred.graph;
-  Tensor y = g.activation(pred.info().name + ".weighted_mse", Shape{1});
-  g.add(std::make_unique<MseOp>(n, period), {pred, target, weight}, {y});
   return y;
 }
 

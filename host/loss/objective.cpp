@@ -27,19 +27,14 @@ NovelViewLoss novel_view_loss(const RenderOutputs& rendered, Tensor raw, Tensor 
     return masked_mse_area(rendered.nerf_rgb, target, targets.masks, ranks);
   });
   add(l.mask, w.mask, [&] {
-    if (targets.mask_weight.valid()) {
-      if (cv.mask_l1) throw Error("novel_view_loss: per-ray mask weights need the mse mask loss", kExitInternal);
-      return weighted_mse(rendered.mask, targets.masks, targets.mask_weight);
-    }
     return cv.mask_l1 ? mask_l1_loss(rendered.mask, targets.masks) : mse(rendered.mask, targets.masks);
   });
   add(l.blending, w.blending, [&] { return blending_loss(raw, options.blend_sigmoid); });
   // Without an object NeRF there is nothing to push outside a mask.
   const size_t nerfs = rendered.mask.shape()[0];
   add(l.alpha, nerfs > 1 ? w.alpha : 0.0f, [&] {
-    const Tensor masks = targets.alpha_masks.valid() ? targets.alpha_masks : targets.masks;
-    return cv.alpha_outside ? alpha_loss_outside(raw, delta, masks, noise, options.blend_sigmoid, ranks)
-                            : alpha_loss(raw, delta, masks, noise, options.blend_sigmoid);
+    return cv.alpha_outside ? alpha_loss_outside(raw, delta, targets.masks, noise, options.blend_sigmoid, ranks)
+                            : alpha_loss(raw, delta, targets.masks, noise, options.blend_sigmoid);
   });
   add(l.sparsity, nerfs > 1 ? w.sparsity : 0.0f,
       [&] { return sparsity_loss(raw, delta, targets.masks, noise); });

@@ -1,6 +1,5 @@
 #include "nova/train/pixel_batch.hpp"
 
-#include <algorithm>
 #include <sstream>
 
 #include "nova/runtime/error.hpp"
@@ -28,32 +27,8 @@ std::vector<std::vector<uint32_t>> pixel_regions(const std::vector<Image8>& mask
   return regions;
 }
 
-namespace {
-
-// The band of an edge_band window about (x, y) in `mask`: whether it holds pixels on both sides
-// of the mask's edge, and its largest value (the mask dilated by the band).
-struct EdgeWindow {
-  bool edge = false;
-  uint8_t largest = 0;
-};
-
-EdgeWindow edge_window(const Image8& mask, int x, int y, int band) {
-  bool inside = false, outside = false;
-  uint8_t largest = 0;
-  for (int v = std::max(0, y - band); v <= std::min(mask.height - 1, y + band); ++v)
-    for (int u = std::max(0, x - band); u <= std::min(mask.width - 1, x + band); ++u) {
-      const uint8_t m = mask.at(u, v);
-      largest = std::max(largest, m);
-      (m >= 128 ? inside : outside) = true;
-    }
-  return {inside && outside, largest};
-}
-
-}  // namespace
-
 PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
-                       const std::vector<std::vector<uint32_t>>& regions, int rays, std::mt19937& rng,
-                       int edge_band) {
+                       const std::vector<std::vector<uint32_t>>& regions, int rays, std::mt19937& rng) {
   std::vector<size_t> present;
   for (size_t k = 0; k < regions.size(); ++k)
     if (!regions[k].empty()) present.push_back(k);
@@ -80,18 +55,6 @@ PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
       for (int c = 0; c < 3; ++c) b.rgb[r * 3 + c] = rgb.at(x, y, c) / 255.0f;
       for (size_t m = 0; m < N; ++m) b.masks[m * R + r] = masks[m].at(x, y) / 255.0f;
     }
-  if (edge_band > 0) {
-    b.mask_weight.assign(R, 1.0f);
-    b.alpha_masks = b.masks;
-    for (size_t i = 0; i < R; ++i) {
-      const int x = static_cast<int>(b.pixels[i * 2]), y = static_cast<int>(b.pixels[i * 2 + 1]);
-      for (size_t m = 1; m < N; ++m) {
-        const EdgeWindow e = edge_window(masks[m], x, y, edge_band);
-        if (e.edge) b.mask_weight[i] = 0.0f;
-        b.alpha_masks[m * R + i] = e.largest / 255.0f;
-      }
-    }
-  }
   return b;
 }
 

@@ -39,14 +39,14 @@ StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std:
     size_t usable = 0;
     for (const auto& r : warped) usable += r.size();
     if (usable < static_cast<size_t>(c.rays) / 4) continue;
-    batch = draw_pixels(af.rgb, af.masks, warped, c.rays, rng, c.mask_edge_band);
+    batch = draw_pixels(af.rgb, af.masks, warped, c.rays, rng);
     cameras = af.cameras;
     if (want_nerf_images) nerf_images = std::move(af.images);
     drawn = true;
   }
   if (!drawn && joint) {
     augmented = false;
-    batch = draw_pixels(frame.rgb, frame.masks, regions[fi], c.rays, rng, c.mask_edge_band);
+    batch = draw_pixels(frame.rgb, frame.masks, regions[fi], c.rays, rng);
   } else if (!drawn) {
     const auto& r = regions[fi];
     std::vector<std::vector<uint32_t>> background_only(r.size());
@@ -67,13 +67,8 @@ PixelBatch slice_batch(const PixelBatch& batch, size_t R, size_t a, size_t n) {
   PixelBatch mine;
   mine.pixels.assign(batch.pixels.begin() + 2 * a, batch.pixels.begin() + 2 * (a + n));
   mine.rgb.assign(batch.rgb.begin() + 3 * a, batch.rgb.begin() + 3 * (a + n));
-  const auto rows = [&](const std::vector<float>& all, std::vector<float>& part) {
-    for (size_t k = 0; k < all.size() / R; ++k)
-      part.insert(part.end(), all.begin() + k * R + a, all.begin() + k * R + a + n);
-  };
-  rows(batch.masks, mine.masks);
-  rows(batch.mask_weight, mine.mask_weight);
-  rows(batch.alpha_masks, mine.alpha_masks);
+  for (size_t k = 0; k < batch.masks.size() / R; ++k)
+    mine.masks.insert(mine.masks.end(), batch.masks.begin() + k * R + a, batch.masks.begin() + k * R + a + n);
   mine.region_rays = batch.region_rays;
   return mine;
 }

@@ -108,10 +108,6 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->times = g.input("times", Shape{static_cast<size_t>(K), 1});
   s->target_rgb = g.input("target_rgb", Shape{R, 3});
   s->target_masks = g.input("target_masks", Shape{N, R});
-  if (c.mask_edge_band > 0) {
-    s->target_mask_weight = g.input("target_mask_weight", Shape{R});
-    s->target_alpha_masks = g.input("target_alpha_masks", Shape{N, R});
-  }
   if (c.conventions.nerf_rgb_area && c.weights.nerf_rgb > 0.0f)
     s->target_nerf_rgb = g.input("target_nerf_rgb", Shape{N, R, 3});
   Rays rays = generate_rays(s->pixels, s->cameras, {.ndc = geo.ndc});
@@ -139,9 +135,8 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   const RenderOptions ro = joint_render_options(c.conventions, c.weights);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);
   DisparityTargets disparity{&g, R, {}, {}};
-  const NovelViewTargets targets{s->target_rgb, s->target_masks, s->target_nerf_rgb, s->target_mask_weight,
-                                 s->target_alpha_masks};
-  Objective o = joint_objective({out, raw, smp.delta, smp.z, s->noise}, targets, c.weights, ro, c.conventions,
+  Objective o = joint_objective({out, raw, smp.delta, smp.z, s->noise},
+                                {s->target_rgb, s->target_masks, s->target_nerf_rgb}, c.weights, ro, c.conventions,
                                 prior_weights(c), disparity_usable(geo) ? &disparity : nullptr, s->motion,
                                 s->motion.valid() ? motion_options(geo).frames : 0, slice.ranks);
   const Tensor full_rgb = o.term("full_rgb");

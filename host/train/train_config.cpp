@@ -217,9 +217,6 @@ std::vector<ConfigOption> make_options() {
   o.push_back(float_option("w-order", "weight of the order loss: each object NeRF's depth on background rays is the static NeRF's (the reference's 0.1)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.weights.order; }));
   o.back().before = "0";
-  o.push_back(int_option("mask-edge-band", "joint training: pixels within this many pixels of an object mask's edge (either side) are not held to the mask: no mask loss there, and the alpha loss lets each object's density reach that far past its mask (0: every pixel held to it)", 0, 64,
-                         [](TrainConfig& c) -> int& { return c.mask_edge_band; }));
-  o.back().before = "0";
   o.push_back(convention_option("mask-loss", "mask loss: mse (mean square over NeRFs and rays) or l1 (per NeRF the mean |M_n - m_n| over rays, summed: the reference code's)",
                                 "mse", "l1", [](TrainConfig& c) -> bool& { return c.conventions.mask_l1; }));
   o.push_back(convention_option("nerf-rgb-loss", "per-NeRF RGB loss: mean (masked square error over N R 3, one target colour) or area (per NeRF over its mask's area, each NeRF against its own, on augmented steps warped, view: the reference code's)",
@@ -343,8 +340,6 @@ void validate(const TrainConfig& c) {
   if (c.object_samples > 0 && c.field.motion != ObjectMotion::Rigid)
     throw Error("option 'object-samples': samples crowd about where a rigid object's motion puts it; it needs "
                 "'object-motion rigid' (object-motion is " + std::string(object_motion_name(c.field.motion)) + ")");
-  if (c.mask_edge_band > 0 && c.conventions.mask_l1)
-    throw Error("option 'mask-edge-band': weighs the mse mask loss's rays; it needs 'mask-loss mse' (mask-loss is l1)");
   const NovelViewLossWeights& w = c.weights;
   if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");

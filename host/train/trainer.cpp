@@ -194,10 +194,6 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     exec_->set(graph_->target_nerf_rgb, detail::nerf_rgb_targets(frame, drawn.nerf_images, batch, N, R));
   if (joint) {
     exec_->set(graph_->target_masks, batch.masks);
-    if (graph_->target_mask_weight.valid()) {
-      exec_->set(graph_->target_mask_weight, batch.mask_weight);
-      exec_->set(graph_->target_alpha_masks, batch.alpha_masks);
-    }
     exec_->set(graph_->times, std::vector<float>(static_cast<size_t>(scene_.num_objects), static_cast<float>(frame.time)));
     if (graph_->level_window.valid()) {
       const HashGridConfig& h = object_hash_config(config_.field);

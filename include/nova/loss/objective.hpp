@@ -53,10 +53,6 @@ struct NovelViewTargets {
   // [N, R, 3] each NeRF's own target colour (on augmented steps object n's own warped view):
   // read by the per-NeRF RGB loss under LossConventions::nerf_rgb_area; invalid: rgb for all.
   Tensor nerf_rgb{};
-  // TrainConfig::mask_edge_band: [R] the mask loss's weight of each ray (0 near an object's
-  // mask edge), and [N, R] the masks the alpha loss reads (each object's dilated by the band).
-  // Invalid: every ray weighs 1 and the alpha loss reads `masks`.
-  Tensor mask_weight{}, alpha_masks{};
 };
 
 struct NovelViewLoss {

@@ -10,11 +10,6 @@ namespace nova {
 
 // Mean over all elements of (pred - target)^2: a scalar.
 Tensor mse(Tensor pred, Tensor target);
-// sum_i w[i % P] (pred[i] - target[i])^2 / n over the n elements, with the P weights of
-// `weight` repeating along pred (P divides n; data, not differentiated): the mask loss with a
-// weight per ray, [R], over the [N, R] masks. Divided by n, not by the weights' sum, so that a
-// weight of 0 drops an element's term without raising the others'.
-Tensor weighted_mse(Tensor pred, Tensor target, Tensor weight);
 
 // sum_i weights[i] * terms[i] over scalars.
 Tensor weighted_sum(const std::vector<Tensor>& terms, const std::vector<float>& weights);

@@ -19,9 +19,6 @@ struct PixelBatch {
   std::vector<float> rgb;     // [R, 3] in [0, 1]
   std::vector<float> masks;   // [N, R] in [0, 1]; masks[0] = background
   std::vector<int> region_rays;  // rays drawn from each region (background, objects)
-  // With an edge band (draw_pixels): [R] 0 for a ray within the band of an object mask's edge,
-  // else 1; [N, R] the masks dilated by the band (masks[0] as it is). Empty without a band.
-  std::vector<float> mask_weight, alpha_masks;
 };
 
 // Pixel regions: a pixel belongs to the object whose mask is largest there when that mask
@@ -31,13 +28,10 @@ std::vector<std::vector<uint32_t>> pixel_regions(const std::vector<Image8>& mask
 
 // `rays` pixels: an equal share for each non-empty region (the remainder to the first
 // non-empty one), uniform with replacement inside it, so that small objects get as many
-// rays as the background. `regions` from pixel_regions on the same masks. `edge_band` > 0
-// also fills mask_weight and alpha_masks: an object's mask is read as inside at >= 128, and a
-// pixel is in its band when the (2 edge_band + 1)^2 window about it (cut to the image) holds
-// both inside and outside pixels.
+// rays as the background. `regions` from pixel_regions on the same masks.
 PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
                        const std::vector<std::vector<uint32_t>>& regions, int rays,
-                       std::mt19937& rng, int edge_band = 0);
+                       std::mt19937& rng);
 
 // The generator's full state as text, and back (Error on malformed text).
 std::string rng_state(const std::mt19937& rng);

@@ -23,9 +23,6 @@ struct StepGraph {
   // Data inputs, set every step (invalid when the graph has none); times is [K, 1], each
   // object's time.
   Tensor pixels, cameras, times, target_rgb, target_masks;
-  // With TrainConfig::mask_edge_band: [R] the mask loss's ray weights, [N, R] the alpha
-  // loss's masks (PixelBatch::mask_weight, alpha_masks).
-  Tensor target_mask_weight, target_alpha_masks;
   // Drawn on the device every run (random.hpp): stratified jitter [R, S] and, with
   // noise_std > 0, density noise [N, R * S]. `draws` is their counter: set it to the step.
   Tensor jitter, noise;

@@ -33,12 +33,6 @@ struct TrainConfig : ModelConfig {
   int augment_start = 0;         // joint steps before the first augmented one (warm-up)
   float augment_degrees = 20.0f;
   NovelViewLossWeights weights;
-  // Joint training: pixels within this many pixels (a square window) of an object mask's edge,
-  // on either side, are not held to the mask: the mask loss skips their rays and the alpha
-  // loss lets each object's density reach that far past its mask. Colour still trains them.
-  // A mask traced by hand or by a network is rarely right to the pixel at the edge (0: every
-  // pixel is held to the mask, as in the reference).
-  int mask_edge_band = 0;
   // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
   // public reference code's (reference); docs/training.md, "Loss conventions".
   LossConventions conventions;
