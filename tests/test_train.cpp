@@ -249,6 +249,36 @@ BOOST_AUTO_TEST_CASE(resume_is_bit_identical) {
   }
 }
 
+// depth-start: pretraining's first steps train no depth term (metrics.jsonl records it as 0),
+// the later ones do, and 0 keeps it from the first step.
+BOOST_AUTO_TEST_CASE(depth_term_waits_for_depth_start) {
+  const Scene scene = tiny_scene();
+  BOOST_REQUIRE(disparity_usable(ray_geometry(scene)));
+  for (int start : {0, 6}) {
+    TempDir dir("depth_start");
+    TrainConfig c = tiny_config(Encoding::HashGrid);
+    c.pretrain_steps = 12;
+    c.steps = 0;
+    c.rays = 64;
+    c.samples = 8;
+    c.log_every = 1;
+    c.depth_start = start;
+    Trainer t(runtime(), scene, c, (dir / "run").string());
+    t.run({}, 12);
+    const std::string metrics = read_all(dir / "run" / "metrics.jsonl");
+    int records = 0;
+    for (size_t at = metrics.find("\"step\":"); at != std::string::npos; at = metrics.find("\"step\":", at + 1)) {
+      const long step = std::stol(metrics.substr(at + 7));
+      const size_t d = metrics.find("\"depth\":", at);
+      BOOST_REQUIRE(d != std::string::npos);
+      const double depth = std::stod(metrics.substr(d + 8));
+      BOOST_TEST((depth > 0.0) == (step > start), "step " << step << " depth " << depth << " start " << start);
+      ++records;
+    }
+    BOOST_TEST(records == 12);
+  }
+}
+
 // A rigid object starts where its masks are: on entering the joint phase every frame's
 // anchor (the motion's translation) projects into that frame inside the object's mask, and
 // in front of the camera; its first frame is unturned (it fixes the canonical space), and

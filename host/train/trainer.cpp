@@ -186,7 +186,9 @@ void Trainer::train_step(bool log, TrainProgress& p) {
   exec_->set(graph_->cameras, camera_rows(cameras));
   exec_->set(graph_->target_rgb, batch.rgb);
   if (graph_->target_depth.valid()) {
-    const detail::DepthTargets d = detail::depth_targets(frame, batch, R, augmented);
+    detail::DepthTargets d = detail::depth_targets(frame, batch, R, augmented);
+    // Before depth_start the depth term has no valid ray: it is 0 and sends no gradient.
+    if (!joint && phase_step < c.depth_start) std::fill(d.valid.begin(), d.valid.end(), 0.0f);
     exec_->set(graph_->target_depth, d.target);
     exec_->set(graph_->depth_valid, d.valid);
   }

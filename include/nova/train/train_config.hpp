@@ -39,6 +39,10 @@ struct TrainConfig : ModelConfig {
   // Depth up to scale and shift against the scene's disparity maps (disp/), in both phases,
   // as DynamicNeRF (whose code NOVA builds on) does; off without disparity or with 0.
   float w_depth = 0.04f;
+  // Pretraining steps before the depth term enters (0: from the first step). The term
+  // standardises the rendered depth over the batch, so while the field is still a flat haze
+  // its gradient is divided by a near-zero spread and can hold the colours there.
+  int depth_start = 0;
   // Distortion loss (losses.hpp) of each object NeRF on its mask's rays in joint training: a
   // prior for one surface per ray against streaks (not in the reference: 0 there).
   float w_distortion = 0.0f;
