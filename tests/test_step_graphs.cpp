@@ -71,29 +71,10 @@ BOOST_AUTO_TEST_CASE(free_space_term_needs_weight_and_disparity) {
   BOOST_TEST(ops_of_type(joint->graph, "depth_loss") == 0u);  // w-depth 0: its own term stays out
   BOOST_TEST(joint->target_depth.valid());
   BOOST_TEST(has_term(*joint, "free_space"));
-  // The objects' term is the joint phase's: pretraining has none at any w-free-space.
-  c.w_static_free_space = 0.0f;
+  // The static NeRF takes no part: pretraining has no free-space term.
   BOOST_TEST(ops_of_type(build_pretrain_graph(c, geo)->graph, "free_space_loss") == 0u);
   c.w_free_space = 0.0f;
   BOOST_TEST(ops_of_type(build_joint_graph(c, geo)->graph, "free_space_loss") == 0u);
-}
-
-// The static NeRF's own free-space term: pretraining only, with weight and disparity.
-BOOST_AUTO_TEST_CASE(static_free_space_term_in_pretraining) {
-  TrainConfig c = small_config();
-  c.w_depth = 0.0f;
-  c.w_free_space = 0.0f;
-  c.w_static_free_space = 0.1f;
-  RayGeometry geo = two_objects();
-  BOOST_TEST(ops_of_type(build_pretrain_graph(c, geo)->graph, "free_space_loss") == 0u);  // no disparity
-  geo.disparity = true;
-  auto pretrain = build_pretrain_graph(c, geo);
-  BOOST_TEST(ops_of_type(pretrain->graph, "free_space_loss") == 1u);
-  BOOST_TEST(has_term(*pretrain, "static_free_space"));
-  BOOST_TEST(pretrain->target_depth.valid());
-  BOOST_TEST(ops_of_type(build_joint_graph(c, geo)->graph, "free_space_loss") == 0u);
-  c.w_static_free_space = 0.0f;
-  BOOST_TEST(ops_of_type(build_pretrain_graph(c, geo)->graph, "free_space_loss") == 0u);
 }
 
 BOOST_AUTO_TEST_CASE(zero_weight_terms_are_not_built) {

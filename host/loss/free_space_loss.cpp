@@ -92,7 +92,7 @@ Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor 
   for (const Tensor& t : {depth, target, valid})
     if (!(t.shape() == Shape{l.rays}))
       bad(t.info().name + " must be [" + std::to_string(l.rays) + "], got " + t.shape().str());
-  if (masks.shape().numel() != l.nerfs * l.rays)
+  if (!(masks.shape() == Shape{l.nerfs, l.rays}))
     bad("masks must be [" + std::to_string(l.nerfs) + ", " + std::to_string(l.rays) + "], got " +
         masks.shape().str());
   if (!(margin >= 0.0f)) bad("margin must be >= 0");

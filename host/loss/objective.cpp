@@ -115,14 +115,6 @@ Objective pretrain_objective(const RenderedRays& r, Tensor target_rgb, const Pri
   const Tensor rgb = pretrain_rgb_loss(r.out.rgb, target_rgb);
   Objective o{rgb, {{"static_rgb", rgb}}};
   add_depth_prior(o, r, priors, disparity, ranks);
-  // Every pretraining ray is the background's: the rays with disparity are the loss's mask.
-  if (priors.static_free_space > 0.0f && disparity) {
-    disparity->make();
-    o.add("static_free_space",
-          free_space_loss(r.raw, r.delta, r.z, r.out.depth, disparity->target, disparity->valid, disparity->valid,
-                          r.noise, priors.free_space_margin, 0, 0.0f, ranks),
-          priors.static_free_space);
-  }
   return o;
 }
 

@@ -25,7 +25,6 @@ PriorWeights prior_weights(const TrainConfig& c) {
   PriorWeights p;
   p.depth = c.w_depth;
   p.free_space = c.w_free_space;
-  p.static_free_space = c.w_static_free_space;
   p.free_space_margin = c.free_space_margin;
   p.free_space_behind = c.free_space_behind;
   p.distortion = c.w_distortion;

@@ -268,9 +268,6 @@ std::vector<ConfigOption> make_options() {
   o.push_back(float_option("w-free-space", "weight of the free-space loss: object weight in front of the surface the disparity gives, on its mask's rays (joint training; NDC scenes with disp/ only; not in the reference)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_free_space; }));
   o.back().before = "0";
-  o.push_back(float_option("w-static-free-space", "weight of the free-space loss of the static NeRF in pretraining: its weight in front of the surface the disparity gives (NDC scenes with disp/ only; not in the reference)", 0.0, 1e6,
-                           [](TrainConfig& c) -> float& { return c.w_static_free_space; }));
-  o.back().before = "0";
   o.push_back(float_option("free-space-margin", "free-space loss: depth (NDC t) in front of the disparity's surface that still counts as the surface", 0.0, 1.0,
                            [](TrainConfig& c) -> float& { return c.free_space_margin; }));
   o.push_back(float_option("free-space-behind", "free-space loss: weight of object weight more than the margin behind the disparity's surface, relative to in front (0: in front only)", 0.0, 1e6,

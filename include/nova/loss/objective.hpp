@@ -98,8 +98,6 @@ struct Objective {
 // free-space-margin and free-space-behind, w-distortion, w-motion-smooth).
 struct PriorWeights {
   float depth = 0, free_space = 0, distortion = 0, motion_smooth = 0;
-  // The free-space loss of the static NeRF on its rays with usable disparity (pretraining).
-  float static_free_space = 0;
   float free_space_margin = 0.05f, free_space_behind = 0;
 };
 

@@ -71,8 +71,8 @@ Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Te
 // `behind` > 0 each sample also costs behind * max(0, z_i - z*_r - margin): weight pushed back
 // along the rays, which the one camera that sees an object at a time cannot tell from the
 // surface, is pulled to the disparity's depth too. raw, delta, z, masks, noise as
-// distortion_loss (masks any shape of N R values: [R] for one NeRF); depth, target, valid [R]
-// as depth_loss. With `ranks` of more than one rank the fit is the whole batch's, as depth_loss's statistics (the mean over (NeRF, ray) pairs
+// distortion_loss; depth, target, valid [R] as depth_loss. With `ranks` of more than one rank
+// the fit is the whole batch's, as depth_loss's statistics (the mean over (NeRF, ray) pairs
 // needs nothing more: each rank has the same share of them).
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise = {}, float margin = 0.05f,

@@ -55,9 +55,6 @@ struct TrainConfig : ModelConfig {
   // disparity gives (not in the reference: 0 there).
   float w_free_space = 0.0f;
   float free_space_margin = 0.05f;
-  // Pretraining: the same loss for the static NeRF on its rays (weight in front of the
-  // background's surface is haze the colours of several views blur into).
-  float w_static_free_space = 0.0f;
   // Weight more than the margin *behind* that depth costs free_space_behind times as much: an
   // object pushed back along the one camera's rays renders the same training image.
   float free_space_behind = 0.0f;
