@@ -54,6 +54,16 @@ TrainConfig tiny_config(Encoding encoding) {
   return c;
 }
 
+// tiny_config's networks for a run of a few steps.
+TrainConfig short_config(int pretrain_steps, int steps, int rays, int samples) {
+  TrainConfig c = tiny_config(Encoding::HashGrid);
+  c.pretrain_steps = pretrain_steps;
+  c.steps = steps;
+  c.rays = rays;
+  c.samples = samples;
+  return c;
+}
+
 Scene tiny_scene() {
   LoadOptions o;
   o.load_gt = true;
@@ -256,11 +266,7 @@ BOOST_AUTO_TEST_CASE(depth_term_waits_for_depth_start) {
   BOOST_REQUIRE(disparity_usable(ray_geometry(scene)));
   for (int start : {0, 6}) {
     TempDir dir("depth_start");
-    TrainConfig c = tiny_config(Encoding::HashGrid);
-    c.pretrain_steps = 12;
-    c.steps = 0;
-    c.rays = 64;
-    c.samples = 8;
+    TrainConfig c = short_config(12, 0, 64, 8);
     c.log_every = 1;
     c.depth_start = start;
     Trainer t(runtime(), scene, c, (dir / "run").string());
@@ -674,11 +680,7 @@ BOOST_AUTO_TEST_CASE(default_pivot_falls_back_to_the_origin) {
 BOOST_AUTO_TEST_CASE(mismatched_checkpoints_are_refused) {
   const Scene scene = tiny_scene();
   TempDir dir("mismatch");
-  TrainConfig c = tiny_config(Encoding::HashGrid);
-  c.pretrain_steps = 2;
-  c.steps = 2;
-  c.rays = 32;
-  c.samples = 4;
+  TrainConfig c = short_config(2, 2, 32, 4);
   {
     Trainer t(runtime(), scene, c, (dir / "run").string());
     t.run();
