@@ -1,7 +1,7 @@
 // nova masks (include/nova/masks/motion_masks.hpp): the reprojection against a float64
 // reference, the masks of the tiny synthetic scene against its exact masks, the growth over
-// the depth's surfaces, the hole filling, the peel of blurred-depth background and the tracking of crossing objects on made-up
-// regions and depths, and bad input
+// the depth's surfaces, the hole filling, the peel of blurred-depth background and the
+// tracking of crossing objects on made-up regions and depths, and bad input
 // (missing disparity or poses, a static video, nothing left behind on failure).
 #include <boost/test/unit_test.hpp>
 #include <cmath>
@@ -226,7 +226,8 @@ BOOST_AUTO_TEST_CASE(peel_drops_background_with_a_blurred_depth_and_keeps_the_ro
   for (const Case c : {Case{"moving rod, blurred band", true, 0.1}, Case{"moving rod, exact band", false, 0.1},
                        Case{"still rod, exact band", false, 0.0}}) {
     auto [frames, rod_mask, region] = make_frames(c.blurred, c.speed);
-    const cv::Mat peeled = nova::masks::peel_background(frames, 2, region, 0.5, o);
+    const cv::Mat raw = nova::masks::motion_score(frames, 2, o);
+    const cv::Mat peeled = nova::masks::peel_background(frames, 2, region, raw, 0.5, o);
     const int rod_px = cv::countNonZero(rod_mask), band_px = cv::countNonZero(region & ~rod_mask);
     BOOST_TEST_REQUIRE(rod_px == 8 * H);
     BOOST_TEST(cv::countNonZero(peeled & rod_mask) == rod_px, c.name << ": the rod whole");

@@ -75,18 +75,20 @@ class PixelScorer {
 
 // The raw per-pixel motion score of frame i (CV_32F).
 cv::Mat motion_score(const std::vector<FrameData>& frames, int i, const MotionMaskOptions& options);
-// `region` of frame i without the pixels that are motion at their own depth but match their
-// neighbours when placed at the farthest depth outside the region within options.peel_radius
-// (a fraction of the width): background whose disparity a blur carried towards the object's.
-cv::Mat peel_background(const std::vector<FrameData>& frames, int i, const cv::Mat& region, double threshold,
-                        const MotionMaskOptions& options);
+// `region` of frame i without the pixels that are motion at their own depth (raw_score, frame
+// i's motion_score, at or above threshold) but match their neighbours when placed at the
+// farthest depth outside the region within options.peel_radius (a fraction of the width):
+// background whose disparity a blur carried towards the object's.
+cv::Mat peel_background(const std::vector<FrameData>& frames, int i, const cv::Mat& region, const cv::Mat& raw_score,
+                        double threshold, const MotionMaskOptions& options);
 
 // The threshold from the smoothed scores of all frames.
 double score_threshold(const std::vector<cv::Mat>& scores, const MotionMaskOptions& options,
                        std::vector<std::string>& notes);
-// The moving region of frame i (CV_8U, 255 inside): threshold, clean-up, peel_background,
-// growth over the depth's smooth surfaces (options.grow_depth), GrabCut.
-cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame,
+// The moving region of frame i (CV_8U, 255 inside) from its smoothed and raw scores:
+// threshold, clean-up, peel_background, growth over the depth's smooth surfaces
+// (options.grow_depth), GrabCut.
+cv::Mat moving_region(const cv::Mat& score, const cv::Mat& raw_score, double threshold, const Image8& frame,
                       const std::vector<FrameData>& frames, int i, const MotionMaskOptions& options);
 // Each connected part of `region` grown over pixels whose inverse depth changes by less than
 // `step` (relative) from pixel to pixel, unless it would grow past `max_growth` times its area.

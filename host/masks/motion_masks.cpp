@@ -77,10 +77,12 @@ MotionMasks make_motion_masks(const Scene& scene, const MotionMaskOptions& optio
     report(options, s.str() + t);
   }
 
-  std::vector<cv::Mat> scores;
+  // Raw scores (the peel reads a pixel's own) and smoothed ones (the threshold and the regions).
+  std::vector<cv::Mat> raw_scores, scores;
   for (int i = 0; i < n; ++i) {
-    cv::Mat s = masks::motion_score(frames, i, options);
-    cv::GaussianBlur(s, s, cv::Size(0, 0), 1.0);
+    raw_scores.push_back(masks::motion_score(frames, i, options));
+    cv::Mat s;
+    cv::GaussianBlur(raw_scores.back(), s, cv::Size(0, 0), 1.0);
     scores.push_back(s);
     if ((i + 1) % std::max(1, n / 4) == 0 || i + 1 == n) {
       char line[96];
@@ -93,7 +95,8 @@ MotionMasks make_motion_masks(const Scene& scene, const MotionMaskOptions& optio
 
   std::vector<cv::Mat> regions;
   for (int i = 0; i < n; ++i)
-    regions.push_back(masks::moving_region(scores[size_t(i)], out.threshold, scene.frames[size_t(i)].rgb, frames, i, options));
+    regions.push_back(masks::moving_region(scores[size_t(i)], raw_scores[size_t(i)], out.threshold,
+                                           scene.frames[size_t(i)].rgb, frames, i, options));
   {
     char line[96];
     std::snprintf(line, sizeof line, "regions: %d frames (%.1f s)", n, seconds());

@@ -82,8 +82,8 @@ cv::Mat motion_score(const std::vector<FrameData>& frames, int i, const MotionMa
   return score;
 }
 
-cv::Mat peel_background(const std::vector<FrameData>& frames, int i, const cv::Mat& region, double threshold,
-                        const MotionMaskOptions& options) {
+cv::Mat peel_background(const std::vector<FrameData>& frames, int i, const cv::Mat& region, const cv::Mat& raw_score,
+                        double threshold, const MotionMaskOptions& options) {
   if (options.peel_radius <= 0 || cv::countNonZero(region) == 0) return region;
   const FrameData& f = frames[size_t(i)];
   const PixelScorer scorer(frames, i, options);
@@ -106,7 +106,7 @@ cv::Mat peel_background(const std::vector<FrameData>& frames, int i, const cv::M
       if (!region.at<uint8_t>(y, x) || !(w_far < f.inv_depth.at<float>(y, x))) continue;
       // Only a pixel that is motion at its own depth can be a depth error: one that matched
       // there joined the region for other reasons (the score's blur, a filled hole).
-      if (scorer.best(x, y) < threshold) continue;
+      if (raw_score.at<float>(y, x) < threshold) continue;
       const double s = scorer(x, y, w_far);
       if (s >= 0 && s < threshold) out.at<uint8_t>(y, x) = 0;
     }

@@ -120,7 +120,7 @@ cv::Mat grow_on_depth(const cv::Mat& region, const cv::Mat& inv_depth, double st
   return out;
 }
 
-cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& frame,
+cv::Mat moving_region(const cv::Mat& score, const cv::Mat& raw_score, double threshold, const Image8& frame,
                       const std::vector<FrameData>& frames, int i, const MotionMaskOptions& options) {
   const cv::Mat& inv_depth = frames[size_t(i)].inv_depth;
   const int min_pixels = std::max(4, int(options.min_area * score.total()));
@@ -132,7 +132,7 @@ cv::Mat moving_region(const cv::Mat& score, double threshold, const Image8& fram
   region = clean_region(region, min_pixels, inv_depth);
   // Before growth and GrabCut, so that both start from the object rather than the band of
   // background a blurred disparity carries around it (a thin rod's region is three times its width).
-  region = clean_region(peel_background(frames, i, region, threshold, options), min_pixels, inv_depth);
+  region = clean_region(peel_background(frames, i, region, raw_score, threshold, options), min_pixels, inv_depth);
   if (options.grow_depth > 0) region = grow_on_depth(region, inv_depth, options.grow_depth, options.grow_limit);
   if (!options.grabcut || cv::countNonZero(region) == 0) return region;
 
