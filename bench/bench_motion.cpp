@@ -71,6 +71,9 @@ struct ObjectScore {
   double true_turn = 0, mean_error = 0, worst_error = 0, drift = 0, chained_truth = 0;
   // The trained trajectory's (with --runs): error per frame pair, drift by the last frame.
   double trained_error = -1, trained_drift = -1;
+  // Where a frame pair's motion carries the object's true centre, off the true centre of the
+  // second frame, in the object's radii (mean over pairs): the start's and the trained one's.
+  double shift = 0, trained_shift = -1;
 };
 
 // Object k's turn from frame a to frame b in a trained trajectory [K, F, 6]: a world point of
@@ -80,6 +83,30 @@ Mat3 trained_turn(const std::vector<float>& rows, int frames, int k, int a, int 
   const float* m = &rows[size_t(k - 1) * size_t(frames) * 6];
   const auto angles = [&](int i) { return Vec3{m[i * 6], m[i * 6 + 1], m[i * 6 + 2]}; };
   return multiply(transpose(euler_xyz_to_matrix(angles(b))), euler_xyz_to_matrix(angles(a)));
+}
+
+Vec3 turn_point(const Mat3& r, const Vec3& x) {
+  Vec3 y{};
+  for (size_t i = 0; i < 3; ++i)
+    for (size_t k = 0; k < 3; ++k) y[i] += r[i * 3 + k] * x[k];
+  return y;
+}
+
+double distance(const Vec3& a, const Vec3& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
+
+// A world point of frame a carried to frame b by a trained trajectory: R_b^T R_a (x - tau_a) + tau_b.
+Vec3 trained_carry(const std::vector<float>& rows, int frames, int k, int a, int b, const Vec3& x) {
+  const float* m = &rows[size_t(k - 1) * size_t(frames) * 6];
+  const Vec3 d{x[0] - m[a * 6 + 3], x[1] - m[a * 6 + 4], x[2] - m[a * 6 + 5]};
+  const Vec3 y = turn_point(trained_turn(rows, frames, k, a, b), d);
+  return {y[0] + m[b * 6 + 3], y[1] + m[b * 6 + 4], y[2] + m[b * 6 + 5]};
+}
+
+// The same by two object-to-world poses: P_b P_a^-1 x.
+Vec3 pose_carry(const Mat34& pa, const Mat34& pb, const Vec3& x) {
+  const Vec3 local = turn_point(transpose(rotation_of(pa)), {x[0] - pa[3], x[1] - pa[7], x[2] - pa[11]});
+  const Vec3 y = turn_point(rotation_of(pb), local);
+  return {y[0] + pb[3], y[1] + pb[7], y[2] + pb[11]};
 }
 
 // Which of the scene's objects follows each true object: the one sharing the most pixels with
@@ -143,6 +170,20 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       }
     }
   }
+  // A generator point in the loaded world: scaled, turned by Rc, moved so that the cameras agree.
+  const auto loaded = [&, t0 = Vec3{}]() mutable {
+    const Camera c = world.camera(0);
+    const Vec3 p = turn_point(Rc, {c.position(0), c.position(1), c.position(2)});
+    for (size_t i = 0; i < 3; ++i) t0[i] = scene.frames[0].camera.position(int(i)) - scale * p[i];
+    return [=](const Vec3& x) {
+      const Vec3 y = turn_point(Rc, x);
+      return Vec3{scale * y[0] + t0[0], scale * y[1] + t0[1], scale * y[2] + t0[2]};
+    };
+  }();
+  const auto true_centre = [&](int k, int i) {
+    const Pose34 p = world.object_pose(k, frame_time(i, F));
+    return loaded({p[3], p[7], p[11]});
+  };
   auto true_turn = [&](int k, int a, int b) {  // object k's turn from frame a to b, loaded world
     const Mat3 r = multiply(rotation_of(world.object_pose(k, frame_time(b, F))),
                             transpose(rotation_of(world.object_pose(k, frame_time(a, F)))));
@@ -161,6 +202,7 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
     ObjectScore s;
     s.seed = seed;
     s.object = k;
+    const double radius = scale * synth_bounding_radius(world.scene().objects[size_t(k - 1)].shape);
     std::vector<int> seen;
     const size_t m = size_t(scene_object[size_t(k)]);  // its masks in the scene
     for (int i = 0; i < F; ++i)
@@ -192,21 +234,27 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       s.true_turn += degrees(truth) / (b - a);
       s.mean_error += e;
       s.worst_error = std::max(s.worst_error, e);
+      s.shift += distance(pose_carry(poses[j - 1], poses[j], true_centre(k, a)), true_centre(k, b)) / radius;
       ++s.pairs;
     }
     const Mat3 chain = seen.empty() ? Mat3{1, 0, 0, 0, 1, 0, 0, 0, 1}
                                     : multiply(rotation_of(poses.back()), transpose(rotation_of(poses.front())));
     if (!trained.empty() && seen.size() > 1) {
-      s.trained_error = s.trained_drift = 0;
-      for (size_t j = 1; j < seen.size(); ++j)
+      s.trained_error = s.trained_drift = s.trained_shift = 0;
+      for (size_t j = 1; j < seen.size(); ++j) {
         s.trained_error += degrees(multiply(trained_turn(trained, F, k, seen[j - 1], seen[j]), transpose(true_turn(k, seen[j - 1], seen[j]))));
+        s.trained_shift += distance(trained_carry(trained, F, k, seen[j - 1], seen[j], true_centre(k, seen[j - 1])),
+                                    true_centre(k, seen[j])) / radius;
+      }
       s.trained_error /= double(seen.size() - 1);
+      s.trained_shift /= double(seen.size() - 1);
       s.trained_drift = degrees(multiply(trained_turn(trained, F, k, seen.front(), seen.back()),
                                          transpose(true_turn(k, seen.front(), seen.back()))));
     }
     if (s.pairs > 0) {
       s.true_turn /= s.pairs;
       s.mean_error /= s.pairs;
+      s.shift /= s.pairs;
       const Mat3 whole = true_turn(k, seen.front(), seen.back());
       s.drift = degrees(multiply(chain, transpose(whole)));
       s.chained_truth = degrees(whole);
@@ -238,7 +286,8 @@ int motion(const Args& args) {
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");
-  if (!runs.empty()) std::printf(" %13s %13s", "trained error", "trained drift");
+  std::printf(" %6s", "shift");
+  if (!runs.empty()) std::printf(" %13s %13s %7s", "trained error", "trained drift", "t.shift");
   std::printf("\n");
   double sum_error = 0, sum_drift = 0, sum_trained_error = 0, sum_trained_drift = 0;
   int objects = 0;
@@ -259,7 +308,8 @@ int motion(const Args& args) {
     for (const ObjectScore& s : scores) {
       std::printf("%5d %7d %6d %12.2f %11.2f %11.2f %8.1f / %7.1f %8.1f", s.seed, s.object, s.pairs, s.true_turn,
                   s.mean_error, s.worst_error, s.drift, s.chained_truth, seconds);
-      if (!runs.empty()) std::printf(" %13.2f %13.1f", s.trained_error, s.trained_drift);
+      std::printf(" %6.2f", s.shift);
+      if (!runs.empty()) std::printf(" %13.2f %13.1f %7.2f", s.trained_error, s.trained_drift, s.trained_shift);
       std::printf("\n");
       if (s.pairs == 0) continue;
       sum_error += s.mean_error;
