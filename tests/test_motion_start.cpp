@@ -1,10 +1,12 @@
 // The rigid start's anchors (include/nova/train/motion_init.hpp, outlier_anchors and
-// off_path_anchors): a frame
-// whose anchor jumps off the object's path is dropped, a path with small wobbles or one that
-// turns keeps every frame, and a jump within the floor (the object's own size) stays.
+// off_path_anchors): a frame whose anchor jumps off the object's path is dropped, a path with
+// small wobbles or one that turns keeps every frame, and a jump within the floor (the object's
+// own size) stays. And the rows of the frames without an anchor (fill_motion_rows): linear
+// between, walking on at the nearest two frames' speed beyond.
 #include <boost/test/unit_test.hpp>
 #include <vector>
 
+#include "nova/runtime/error.hpp"
 #include "nova/train/motion_init.hpp"
 
 namespace nova::test {
@@ -88,6 +90,30 @@ BOOST_AUTO_TEST_CASE(the_start_keeps_a_jump_within_two_radii) {
   const std::vector<size_t> dropped = off_path_anchors(p, frame_numbers(12), std::vector<double>(12, 0.2));
   BOOST_TEST_REQUIRE(dropped.size() == 1u);
   BOOST_TEST(dropped[0] == 5u);
+}
+
+// Frames 2, 3, 5 and 6 of 9 show the object: 0, 1 lie before them, 4 between, 7, 8 after.
+// Exact in binary (steps of 0.25 and 0.5), so the rows compare exactly.
+BOOST_AUTO_TEST_CASE(frames_without_the_object_are_filled_in) {
+  const std::vector<int> known{2, 3, 5, 6};
+  const std::vector<MotionRow> rows{{0.5, 0, 0, 1.0, 0, -2}, {0.75, 0, 0, 1.5, 0.25, -2},
+                                    {1.25, 0, 0, 2.5, 0.25, -2.5}, {1.5, 0, 0, 3.0, 0.5, -2.5}};
+  const std::vector<MotionRow> all = fill_motion_rows(known, rows, 9);
+  BOOST_TEST_REQUIRE(all.size() == 9u);
+  const auto same = [](const MotionRow& a, const MotionRow& b) { return a == b; };
+  BOOST_TEST(same(all[2], rows[0]));
+  BOOST_TEST(same(all[6], rows[3]));
+  BOOST_TEST(same(all[4], (MotionRow{1.0, 0, 0, 2.0, 0.25, -2.25})));  // half way
+  // Before: frames 2 -> 3 move (0.5, 0.25, 0) a frame, so frame 0 stands two such steps back,
+  // its turn that of frame 2.
+  BOOST_TEST(same(all[1], (MotionRow{0.5, 0, 0, 0.5, -0.25, -2})));
+  BOOST_TEST(same(all[0], (MotionRow{0.5, 0, 0, 0.0, -0.5, -2})));
+  // After: frames 5 -> 6 move (0.5, 0.25, 0) a frame.
+  BOOST_TEST(same(all[8], (MotionRow{1.5, 0, 0, 4.0, 1.0, -2.5})));
+  // One known frame: every frame takes its row; an inconsistent call is refused.
+  const std::vector<MotionRow> one = fill_motion_rows({3}, {rows[1]}, 5);
+  for (const MotionRow& r : one) BOOST_TEST(same(r, rows[1]));
+  BOOST_CHECK_THROW(fill_motion_rows({1, 2}, {rows[0]}, 4), Error);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

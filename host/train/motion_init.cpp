@@ -182,6 +182,35 @@ std::vector<size_t> off_path_anchors(const std::vector<Vec3>& anchors, const std
   return outlier_anchors(anchors, frames, kOutlierRadii * median(radii));
 }
 
+std::vector<MotionRow> fill_motion_rows(const std::vector<int>& known, const std::vector<MotionRow>& rows, int frames) {
+  if (known.empty() || known.size() != rows.size())
+    throw Error("fill_motion_rows: " + std::to_string(known.size()) + " known frames for " + std::to_string(rows.size()) +
+                    " rows",
+                kExitInternal);
+  std::vector<MotionRow> out(static_cast<size_t>(frames));
+  const size_t last = known.size() - 1;
+  for (int i = 0; i < frames; ++i) {
+    MotionRow& p = out[static_cast<size_t>(i)];
+    const auto after = std::lower_bound(known.begin(), known.end(), i);
+    if (after == known.begin() || after == known.end()) {
+      // Beyond the frames that show it the object keeps the speed of the nearest two, its turn
+      // held: it walks out of view as it came in, where holding its place would draw it into
+      // frames whose masks say it is not there, against its own canonical shape.
+      const bool before = after == known.begin();
+      const size_t a = before ? 0 : last, b = before ? std::min<size_t>(1, last) : (last > 0 ? last - 1 : 0);
+      p = rows[a];
+      if (a == b) continue;
+      const double steps = static_cast<double>(i - known[a]) / (known[a] - known[b]);
+      for (size_t d = 3; d < 6; ++d) p[d] += steps * (rows[a][d] - rows[b][d]);
+    } else {
+      const size_t hi = static_cast<size_t>(after - known.begin()), lo = hi - 1;
+      const double w = known[hi] == i ? 1.0 : static_cast<double>(i - known[lo]) / (known[hi] - known[lo]);
+      for (size_t d = 0; d < 6; ++d) p[d] = (1 - w) * rows[lo][d] + w * rows[hi][d];
+    }
+  }
+  return out;
+}
+
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
                            int samples, Executor& trained) {
   const int K = geo.num_objects, F = motion_options(geo).frames;
@@ -301,7 +330,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
         poses.push_back(pose);
       }
     }
-    std::vector<std::array<double, 6>> known_rows;
+    std::vector<MotionRow> known_rows;
     Vec3 angles{0, 0, 0};
     for (const Mat34& pose : poses) {
       // y = R (x - tau) + q with R the pose's rotation transposed and tau its translation.
@@ -310,18 +339,9 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
       known_rows.push_back({angles[0], angles[1], angles[2], pose[3], pose[7], pose[11]});
     }
     float* r = rows.data() + static_cast<size_t>(k - 1) * F * 6;
-    for (int i = 0; i < F; ++i) {
-      const auto after = std::lower_bound(known.begin(), known.end(), i);
-      std::array<double, 6> p;
-      if (after == known.begin()) p = known_rows.front();
-      else if (after == known.end()) p = known_rows.back();
-      else {
-        const size_t hi = static_cast<size_t>(after - known.begin()), lo = hi - 1;
-        const double w = known[hi] == i ? 1.0 : static_cast<double>(i - known[lo]) / (known[hi] - known[lo]);
-        for (int d = 0; d < 6; ++d) p[static_cast<size_t>(d)] = (1 - w) * known_rows[lo][static_cast<size_t>(d)] + w * known_rows[hi][static_cast<size_t>(d)];
-      }
-      for (int d = 0; d < 6; ++d) r[static_cast<size_t>(i) * 6 + d] = static_cast<float>(p[static_cast<size_t>(d)]);
-    }
+    const std::vector<MotionRow> all = fill_motion_rows(known, known_rows, F);
+    for (int i = 0; i < F; ++i)
+      for (int d = 0; d < 6; ++d) r[static_cast<size_t>(i) * 6 + d] = static_cast<float>(all[static_cast<size_t>(i)][static_cast<size_t>(d)]);
     const std::array<float, 6> box = object_box_row(motion_pivot(r, F), kObjectBoxRadii * radius, geo);
     std::copy(box.begin(), box.end(), boxes.begin() + static_cast<long>(k - 1) * 6);
     object_radii[static_cast<size_t>(k - 1)] = static_cast<float>(radius);

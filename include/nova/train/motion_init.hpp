@@ -13,13 +13,21 @@
 
 namespace nova {
 
+// One frame's motion row: the Euler angles (x, y, z) and the translation (motion_parameter's).
+using MotionRow = std::array<double, 6>;
+
+// The rows of all `frames` frames from those of the frames `known` (ascending, one row each):
+// linear between two known frames; before the first and after the last the translation keeps
+// the speed of the nearest two known frames and the angles stay (one known frame: its row).
+std::vector<MotionRow> fill_motion_rows(const std::vector<int>& known, const std::vector<MotionRow>& rows, int frames);
+
 // The [K, F, 6] motion rows (motion_parameter's layout). With a disparity that the background's
 // parallax places in depth (disparity_fit.hpp): per object, the first frame that shows it puts
 // its canonical space at the mask's centroid at the median depth, unturned, and each later
 // frame is the previous one moved by the alignment of the two frames' views of the object
 // (motion_alignment.hpp). Otherwise no turn, and each frame's anchor is the mask's centroid at
 // the nearer quartile of the static NeRF's depth behind the mask. Frames without the object
-// take their neighbours' rows (linear between, the nearest beyond).
+// take their neighbours' rows (fill_motion_rows).
 // `trained` holds the static NeRF's weights ("static.*"), rendered only without a fit.
 struct MotionStart {
   std::vector<float> rows;   // [K, F, 6]
