@@ -51,10 +51,10 @@ __kernel void copy_cols_back(__global const float* ddst, __global float* dsrc, u
 // is a copy).
 __kernel void gate_rows_back(__global const float* dy, __global const float* gate,
                              __global float* dx, uint rows, uint cols, uint group, uint offset,
-                             int accumulate) {
+                             uint gated, int accumulate) {
   const uint i = get_global_id(0);
   if (i >= rows * cols) return;
-  const float g = dy[i] * gate[offset + i / cols / group];
+  const float g = i % cols < gated ? dy[i] * gate[offset + i / cols / group] : dy[i];
   dx[i] = accumulate ? dx[i] + g : g;
 }
 

@@ -315,19 +315,23 @@ std::vector<float> mixed_gate(size_t n, unsigned seed) {
 // the gate's backward accumulates into x's gradient: one float32 product per element and one
 // addition, rtol 1e-5 with atol 1e-7. Variant 2: an all-ones gate is the identity, so central
 // differences (harness default) apply; elsewhere the backward is deliberately not the
-// forward's derivative and no finite differences run.
+// forward's derivative and no finite differences run. The gated columns (the last dim) are the
+// first few; the rest pass their gradient whole (the static NeRF's blend, which learns from
+// every ray).
 OpEntry gradient_gate_entry() {
   OpEntry e;
   e.name = "gradient_gate";
-  // dims: rays R, rows per ray G, cols C, gate rows, gate row.
-  e.shapes = {{{kOddRows, 3, 5, 2, 1}, 0, "1009 x 3 rows x 5, gate row 1 of 2"},
-              {{1, 1, 3, 1, 0}, 0, "1 x 1 x 3"},
-              {{13, 3, 5, 2, 1}, 1, "13 x 3 rows x 5, gate row 1 of 2, x also read ungated"},
-              {{7, 4, 3, 1, 0}, 2, "7 x 4 rows x 3, all-ones gate", GradCheckOptions{}}};
+  // dims: rays R, rows per ray G, cols C, gate rows, gate row, gated columns.
+  e.shapes = {{{kOddRows, 3, 5, 2, 1, 5}, 0, "1009 x 3 rows x 5, gate row 1 of 2"},
+              {{kOddRows, 3, 5, 2, 1, 4}, 0, "1009 x 3 rows x 5, gate row 1 of 2, column 4 ungated"},
+              {{1, 1, 3, 1, 0, 3}, 0, "1 x 1 x 3"},
+              {{13, 3, 5, 2, 1, 5}, 1, "13 x 3 rows x 5, gate row 1 of 2, x also read ungated"},
+              {{13, 3, 5, 2, 1, 2}, 1, "13 x 3 rows x 5, gate row 1 of 2, columns 2-4 ungated, x also read ungated"},
+              {{7, 4, 3, 1, 0, 3}, 2, "7 x 4 rows x 3, all-ones gate", GradCheckOptions{}}};
   e.build = [](Graph& g, const OpShape& s) {
     const Shape rows{s.dims[0] * s.dims[1], s.dims[2]};
     Tensor x = g.input("x", rows, true), gate = g.input("gate", Shape{s.dims[3], s.dims[0]});
-    Tensor y = gradient_gate(x, gate, s.dims[4]);
+    Tensor y = gradient_gate(x, gate, s.dims[4], s.dims[5]);
     if (s.variant != 1) return OpGraph{{x, gate}, {y}, {}};
     Tensor t = g.input("t", rows), t2 = g.input("t2", rows);
     return OpGraph{{x, gate, t, t2}, {y}, weighted_sum({mse(y, t), mse(x, t2)}, {1.0f, 1.0f})};
@@ -346,10 +350,11 @@ OpEntry gradient_gate_entry() {
   e.reference = [](const OpCase& c) { return std::vector<Expected>{{to_double(c.values[0]), {0, 0}}}; };  // a copy
   e.gradient = [](const OpCase& c) {
     const size_t R = c.shape.dims[0], per_ray = c.shape.dims[1] * c.shape.dims[2], row = c.shape.dims[4];
+    const size_t cols = c.shape.dims[2], gated = c.shape.dims[5];
     const auto& x = c.values[0];
     std::vector<double> dx(x.size());
     for (size_t i = 0; i < dx.size(); ++i) {
-      const double gate = c.values[1][row * R + i / per_ray];
+      const double gate = i % cols < gated ? c.values[1][row * R + i / per_ray] : 1.0;
       if (c.shape.variant != 1) {
         dx[i] = c.upstream[0][i] * gate;
         continue;

@@ -1,5 +1,6 @@
 // The gradient gate: refused shapes, and what it is for: with static-background-only the
-// joint step sends no gradient to the static NeRF from rays of object pixels. Its forward (an
+// joint step sends no gradient to the static NeRF from rays of object pixels (with
+// static-blend-from-objects, none to its colour). Its forward (an
 // exact copy), its gated backward against float64 (also accumulating into an input read
 // ungated) and the all-ones gate's finite differences are the op table's gradient_gate entry
 // (tests/op_table_core.cpp).
@@ -22,12 +23,14 @@ namespace {
 
 // Sum of |gradient| over the parameters whose name starts with `prefix`, after one joint
 // step on random rays whose target masks are `masks` ([3, R]).
-double joint_gradient_mass(bool gate, const std::vector<float>& masks, const std::string& prefix) {
+double joint_gradient_mass(bool gate, const std::vector<float>& masks, const std::string& prefix,
+                           bool blend_from_objects = false) {
   TrainConfig c = preset_config("quick");
   c.rays = 8;
   c.samples = 6;
   c.occupancy = false;
   c.static_background_only = gate;
+  c.static_blend_from_objects = blend_from_objects;
   RayGeometry geo;
   geo.ndc = true;
   geo.num_objects = 2;
@@ -88,6 +91,16 @@ BOOST_AUTO_TEST_CASE(static_nerf_learns_from_background_rays_only) {
   // Ungated, object rays reach it (the reference's behaviour); the object NeRFs learn either way.
   BOOST_TEST(joint_gradient_mass(false, masks_of(objects_only), "static.") > 0.0);
   BOOST_TEST(joint_gradient_mass(true, masks_of(objects_only), "objects.") > 0.0);
+}
+
+BOOST_AUTO_TEST_CASE(static_blend_learns_from_object_rays_when_asked) {
+  const std::vector<float> objects_only = masks_of(std::vector<bool>(8, false));
+  // The colour head sees only the gated colour columns; the blend reaches its head (and, through
+  // it, the shared trunk) from object rays too.
+  BOOST_TEST(joint_gradient_mass(true, objects_only, "static.rgb", true) == 0.0);
+  BOOST_TEST(joint_gradient_mass(true, objects_only, "static.view", true) == 0.0);
+  BOOST_TEST(joint_gradient_mass(true, objects_only, "static.sigma_blend", true) > 0.0);
+  BOOST_TEST(joint_gradient_mass(true, objects_only, "static.sigma_blend", false) == 0.0);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -125,7 +125,9 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   s->pack_static = new_select(c.occupancy, {0});
   s->pack_objects = new_select(c.occupancy, object_grids(K));
   Tensor raw_static = static_raw(smp.positions[0], smp.viewdirs[0], field, s->pack_static);
-  if (c.static_background_only) raw_static = gradient_gate(raw_static, s->target_masks, 0);
+  if (c.static_background_only)
+    raw_static = gradient_gate(raw_static, s->target_masks, 0,
+                               c.static_blend_from_objects ? static_cast<size_t>(kRawBlend) : kRawChannels);
   if (field.motion == ObjectMotion::Rigid && !s->motion.valid())
     s->motion = motion_parameter(g, K, motion_options(geo).frames);
   if (field.motion == ObjectMotion::Rigid && field.encoding == Encoding::HashGrid && c.canonical_coarse_to_fine > 0)

@@ -265,6 +265,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(bool_option("static-background-only", "joint training: the static NeRF learns from background pixels only (object pixels send it no gradient; not in the reference)",
                           [](TrainConfig& c) -> bool& { return c.static_background_only; }));
   o.back().before = "false";
+  o.push_back(bool_option("static-blend-from-objects", "static-background-only: the static NeRF's blend still learns from object pixels, so that it gives way where the objects pass (its colour and density stay gated)",
+                          [](TrainConfig& c) -> bool& { return c.static_blend_from_objects; }));
+  o.back().before = "false";
   o.push_back(float_option("w-free-space", "weight of the free-space loss: object weight in front of the surface the disparity gives, on its mask's rays (joint training; NDC scenes with disp/ only; not in the reference)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_free_space; }));
   o.back().before = "0";

@@ -50,6 +50,11 @@ struct TrainConfig : ModelConfig {
   // pretraining): otherwise, wherever an object NeRF is not yet opaque, the composite loss
   // paints the object's colours into the background along its path (not in the reference).
   bool static_background_only = false;
+  // With static_background_only, the static NeRF's blend still learns from object pixels: a
+  // sample's blends are normalised over the NeRFs, so a static blend left where an object
+  // passes caps the object's share of its own opacity there (a static blend of 0.6 holds an
+  // opaque object's mask near 0.4).
+  bool static_blend_from_objects = false;
   // Free-space loss (losses.hpp) of the object NeRFs in joint training: no weight more than
   // free_space_margin (in the rendered depth's units: NDC t) in front of the depth the
   // disparity gives (not in the reference: 0 there).

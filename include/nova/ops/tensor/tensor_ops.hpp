@@ -2,6 +2,7 @@
 // Ops that move rows and columns of tensors; shapes are row-major, the last dimension the
 // feature dimension.
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "nova/graph/graph.hpp"
@@ -14,8 +15,9 @@ Tensor concat(const std::vector<Tensor>& parts);
 // y = x; the backward passes x's gradient scaled per group of rows: dx[r * G + j] = dy[r * G + j]
 // gate[gate_row, r] for x [R * G, C] and gate [rows, R] (data, no gradient). Deliberately not
 // the derivative of the forward: a gate of 0 stops what flows through those rows, 1 is the
-// identity. Joint training gates the static NeRF's samples with each ray's background mask.
-Tensor gradient_gate(Tensor x, Tensor gate, size_t gate_row = 0);
+// identity. Only columns [0, gated_cols) are gated; the others pass their gradient whole. Joint
+// training gates the static NeRF's samples with each ray's background mask.
+Tensor gradient_gate(Tensor x, Tensor gate, size_t gate_row = 0, size_t gated_cols = SIZE_MAX);
 
 // x [B, C] (data) -> [B, rows, C] ([rows, C] for B = 1): batch b's row in each of its rows.
 // Spreads a per-group constant (an object's time) over its samples without a host upload.
