@@ -180,14 +180,23 @@ BOOST_AUTO_TEST_CASE(render_counts_held_out_frames) {
   // apart there (the scene's held-out cameras have no masks and get no such scores).
   Result e = nova_cli("eval --run " + run + " --views heldout", dir);
   BOOST_REQUIRE_MESSAGE(e.code == 0, e.err);
-  BOOST_TEST(e.out.find("objects  background") != std::string::npos, e.out);
+  BOOST_TEST(e.out.find("objects  background  opacity") != std::string::npos, e.out);
   BOOST_TEST(e.out.find("inside the objects' masks") != std::string::npos, e.out);
+  BOOST_TEST(e.out.find("the objects render") != std::string::npos, e.out);
   const std::string json = read_all(dir / "run" / "eval.json");
   const size_t frame = json.find("\"frame_004\"");
   BOOST_REQUIRE(frame != std::string::npos);
   BOOST_TEST(json.find("\"object_psnr\"", frame) < json.find("}", frame), json);
+  BOOST_TEST(json.find("\"object_opacity\"", frame) < json.find("}", frame), json);
   BOOST_TEST(json.find("\"mean_object_psnr\": ") != std::string::npos);
   BOOST_TEST(json.find("\"mean_object_psnr\": null") == std::string::npos);
+  // The objects' masks summed inside their region: an opacity, so within [0, 1].
+  const std::string key = "\"mean_object_opacity\": ";
+  const size_t at = json.find(key);
+  BOOST_REQUIRE_MESSAGE(at != std::string::npos, json);
+  const double opacity = std::stod(json.substr(at + key.size()));
+  BOOST_TEST(opacity > 0.0);
+  BOOST_TEST(opacity <= 1.0 + 1e-6);
 }
 
 BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
@@ -291,9 +300,9 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_leave_nothing) {
   Result half_eval = nova_cli("eval --run " + (dir / "half").string() + " --views all", dir);
   BOOST_TEST(half_eval.code == 0, half_eval.err);
   // The composition targets are scored, inside their instances first (the synthetic truth
-  // gives where they are).
+  // gives where they are), with how opaque the instances render there.
   BOOST_TEST(half_eval.out.find("composition targets: inside the instances ") != std::string::npos, half_eval.out);
-  BOOST_TEST(half_eval.out.find(" dB, mean PSNR ") != std::string::npos, half_eval.out);
+  BOOST_TEST(half_eval.out.find(" opaque), mean PSNR ") != std::string::npos, half_eval.out);
   expect("render --run " + (dir / "norun").string() + " --out " + (dir / "r").string(), "norun");
   expect("eval --run " + out + " --views sideways", "sideways");
   // A damaged checkpoint is named as such.

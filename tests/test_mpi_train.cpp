@@ -129,6 +129,12 @@ BOOST_AUTO_TEST_CASE(two_ranks_train_as_one, *boost::unit_test::precondition(has
     BOOST_TEST(a > 5.0, key);
     BOOST_TEST(std::fabs(a - b) <= 1e-4 * a, key << ": " << a << " against " << b);
   }
+  {
+    const double a = mean_of(dir / "eval_one" / "eval.json", "mean_object_opacity"),
+                 b = mean_of(dir / "eval_two" / "eval.json", "mean_object_opacity");
+    BOOST_TEST(a > 0.0);
+    BOOST_TEST(std::fabs(a - b) <= 1e-4 * a, "mean_object_opacity: " << a << " against " << b);
+  }
 
   // nova render deals the frames out and rank 0 commits one folder: the same files, byte for
   // byte (every rank renders on the same kind of device).

@@ -41,17 +41,18 @@ std::string region_cell(double v, int width) {
   return std::string(static_cast<size_t>(std::max(0, width - static_cast<int>(text.size()))), ' ') + text;
 }
 
-// With the views' masks known, two more columns: PSNR inside the objects and outside them.
+// With the views' masks known, three more columns: PSNR inside the objects and outside them,
+// and how opaque the objects render inside them.
 void print_table(const std::string& title, const std::vector<Score>& scores) {
   const bool regions = has_regions(scores);
   std::cout << title << "\n  " << std::left << std::setw(28) << "view" << std::right << std::setw(9) << "PSNR"
             << std::setw(8) << "SSIM";
-  if (regions) std::cout << std::setw(9) << "objects" << std::setw(12) << "background";
+  if (regions) std::cout << std::setw(9) << "objects" << std::setw(12) << "background" << std::setw(9) << "opacity";
   std::cout << "\n";
   for (const Score& s : scores) {
     std::cout << "  " << std::left << std::setw(28) << s.name << std::right << std::fixed << std::setprecision(2)
               << std::setw(9) << s.psnr << std::setprecision(4) << std::setw(8) << s.ssim;
-    if (regions) std::cout << region_cell(s.object_psnr, 9) << region_cell(s.background_psnr, 12);
+    if (regions) std::cout << region_cell(s.object_psnr, 9) << region_cell(s.background_psnr, 12) << region_cell(s.object_opacity, 9);
     std::cout << "\n";
   }
 }
@@ -72,6 +73,7 @@ nlohmann::ordered_json json_scores(const std::vector<Score>& scores) {
     if (std::isfinite(s.object_psnr) || std::isfinite(s.background_psnr)) {
       v["object_psnr"] = score_value(s.object_psnr);
       v["background_psnr"] = score_value(s.background_psnr);
+      v["object_opacity"] = score_value(s.object_opacity);
     }
     list.push_back(v);
   }
@@ -156,7 +158,7 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   };
   std::vector<Score> scores = score_views(renderer, scene.num_objects, views, blend.scene_views, write_and_count);
   if (mpi) {  // every view's scores, in the order of all views, on every rank (NaN travels as is)
-    constexpr size_t kFields = 4;
+    constexpr size_t kFields = 5;
     std::vector<float> v(kFields * all_views.size(), 0.0f);
     for (size_t k = 0; k < mine.size(); ++k) {
       const Score& s = scores[k];
@@ -165,12 +167,13 @@ int eval_rank(const Args& args, MpiJob* mpi) {
       row[1] = static_cast<float>(s.ssim);
       row[2] = static_cast<float>(s.object_psnr);
       row[3] = static_cast<float>(s.background_psnr);
+      row[4] = static_cast<float>(s.object_opacity);
     }
     mpi->reducer().sum(v);
     scores.clear();
     for (size_t i = 0; i < all_views.size(); ++i) {
       const float* row = &v[kFields * i];
-      scores.push_back({view_stem(all_views[i].name), row[0], row[1], row[2], row[3]});
+      scores.push_back({view_stem(all_views[i].name), row[0], row[1], row[2], row[3], row[4]});
     }
   }
   if (!lead) return 0;
@@ -198,15 +201,19 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   json["mean_ssim"] = score_value(ms);
   const auto [mop, mbp] = mean_region_scores(scores);
   const bool regions = std::isfinite(mop);  // some view has an objects region
+  const double opacity = mean_object_opacity(scores);
   if (regions) {
     json["mean_object_psnr"] = score_value(mop);
     json["mean_background_psnr"] = score_value(mbp);
+    json["mean_object_opacity"] = score_value(opacity);
   }
   json["compose"] = json_scores(compose);
   const auto [cop, cbp] = mean_region_scores(compose);
+  const double compose_opacity = mean_object_opacity(compose);
   if (std::isfinite(cop)) {
     json["compose_mean_object_psnr"] = score_value(cop);
     json["compose_mean_background_psnr"] = score_value(cbp);
+    json["compose_mean_object_opacity"] = score_value(compose_opacity);
   }
   json["compose_mean_psnr"] = score_value(cp);
   json["compose_mean_ssim"] = score_value(cs);
@@ -220,12 +227,19 @@ int eval_rank(const Args& args, MpiJob* mpi) {
   std::filesystem::rename(path + ".tmp", path);
   std::cout << std::fixed << std::setprecision(2);
   // The objects first: they are a few percent of a frame, and the whole frame's mean hides them.
-  if (regions)
-    std::cout << "inside the objects' masks " << std::setprecision(2) << mop << " dB, outside " << mbp << " dB\n";
+  if (regions) {
+    std::cout << "inside the objects' masks " << std::setprecision(2) << mop << " dB, outside " << mbp << " dB";
+    if (std::isfinite(opacity)) std::cout << "; the objects render " << opacity << " opaque there";
+    std::cout << "\n";
+  }
   if (!scores.empty()) std::cout << "mean PSNR " << mp << " dB, SSIM " << std::setprecision(4) << ms << " over " << scores.size() << " views\n";
   if (!compose.empty()) {
     std::cout << "composition targets: ";
-    if (std::isfinite(cop)) std::cout << "inside the instances " << std::setprecision(2) << cop << " dB, ";
+    if (std::isfinite(cop)) {
+      std::cout << "inside the instances " << std::setprecision(2) << cop << " dB";
+      if (std::isfinite(compose_opacity)) std::cout << " (" << compose_opacity << " opaque)";
+      std::cout << ", ";
+    }
     std::cout << "mean PSNR " << std::setprecision(2) << cp << " dB over " << compose.size() << "\n";
   }
   std::cout << "wrote " << path << " and renders in " << pictures << "/ (" << std::setprecision(1) << secs << " s)\n";

@@ -73,6 +73,27 @@ std::string view_stem(const std::string& name) {
   return stem;
 }
 
+namespace {
+
+// The objects' rendered masks summed, averaged over the region's pixels (>= 128, as
+// region_psnr reads it); the background's mask is the first when it is drawn.
+double region_opacity(const ViewImage& img, const Image8& region, bool background) {
+  const size_t first = background ? 1 : 0;
+  if (img.masks.size() <= first) return std::nan("");
+  double sum = 0;
+  size_t n = 0;
+  for (size_t p = 0; p < region.data.size(); ++p) {
+    if (region.data[p] < 128) continue;
+    double a = 0;
+    for (size_t k = first; k < img.masks.size(); ++k) a += img.masks[k].at(p);
+    sum += a;
+    ++n;
+  }
+  return n ? sum / static_cast<double>(n) : std::nan("");
+}
+
+}  // namespace
+
 std::vector<ViewScore> score_views(ViewRenderer& renderer, int num_objects, const std::vector<GroundTruthView>& views,
                                    bool hard_blend, const RenderSink& sink) {
   std::vector<ViewScore> scores;
@@ -90,6 +111,7 @@ std::vector<ViewScore> score_views(ViewRenderer& renderer, int num_objects, cons
     if (!v.objects.empty()) {
       score.object_psnr = region_psnr(out, v.rgb, v.objects, true);
       score.background_psnr = region_psnr(out, v.rgb, v.objects, false);
+      score.object_opacity = region_opacity(img, v.objects, true);
     }
     scores.push_back(score);
   }
@@ -134,6 +156,7 @@ std::vector<ViewScore> score_compose_targets(ViewRenderer& renderer, const Scene
     if (objects) {
       score.object_psnr = region_psnr(out, *gt, *objects, true);
       score.background_psnr = region_psnr(out, *gt, *objects, false);
+      score.object_opacity = region_opacity(img, *objects, t.background);
     }
     scores.push_back(score);
   }
@@ -161,6 +184,17 @@ std::pair<double, double> mean_region_scores(const std::vector<ViewScore>& s) {
     return n ? sum / n : std::nan("");
   };
   return {mean(&ViewScore::object_psnr), mean(&ViewScore::background_psnr)};
+}
+
+double mean_object_opacity(const std::vector<ViewScore>& s) {
+  double sum = 0;
+  int n = 0;
+  for (const ViewScore& x : s)
+    if (std::isfinite(x.object_opacity)) {
+      sum += x.object_opacity;
+      ++n;
+    }
+  return n ? sum / n : std::nan("");
 }
 
 }  // namespace nova

@@ -37,6 +37,10 @@ struct ViewScore {
   // PSNR inside and outside the view's objects (GroundTruthView::objects); NaN where the view
   // has no masks or the region is empty.
   double object_psnr = std::nan(""), background_psnr = std::nan("");
+  // How opaque the objects render inside that region: the mean over its pixels of the objects'
+  // rendered masks summed (1 where they are solid, less where the background shows through).
+  // NaN where the view has no region or no object is drawn.
+  double object_opacity = std::nan("");
 };
 
 // The frames of a split scene (loaded with load_training_scene(..., split)) as ground-truth
@@ -63,5 +67,8 @@ std::pair<double, double> mean_scores(const std::vector<ViewScore>& scores);
 
 // Mean object and background PSNR over the views that have them (NaN where none has).
 std::pair<double, double> mean_region_scores(const std::vector<ViewScore>& scores);
+
+// Mean object opacity over the views that have one (NaN where none has).
+double mean_object_opacity(const std::vector<ViewScore>& scores);
 
 }  // namespace nova
