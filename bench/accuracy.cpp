@@ -313,13 +313,16 @@ std::string json_text(const std::vector<std::pair<std::string, std::string>>& se
                       {"cam0_views", r.cam0_views},
                       {"cam0_object_psnr", json_number(r.cam0_object_psnr, 4)},
                       {"cam0_background_psnr", json_number(r.cam0_background_psnr, 4)},
+                      {"cam0_object_opacity", json_number(r.cam0_object_opacity, 4)},
                       {"heldout_psnr", json_number(r.heldout_psnr, 4)},
                       {"heldout_ssim", json_number(r.heldout_ssim, 5)},
                       {"heldout_views", r.heldout_views},
                       {"heldout_object_psnr", json_number(r.heldout_object_psnr, 4)},
                       {"heldout_background_psnr", json_number(r.heldout_background_psnr, 4)},
+                      {"heldout_object_opacity", json_number(r.heldout_object_opacity, 4)},
                       {"compose_psnr", json_number(r.compose_psnr, 4)},
                       {"compose_object_psnr", json_number(r.compose_object_psnr, 4)},
+                      {"compose_object_opacity", json_number(r.compose_object_opacity, 4)},
                       {"compose_views", r.compose_views}});
   nlohmann::ordered_json set_rows = nlohmann::ordered_json::array();
   for (const SetSummary& s : sets)

@@ -79,10 +79,12 @@ struct SceneResult {
   // Means over the views whose objects region is known (synthetic ground truth, a real
   // scene's held-out frames; a composition target's region is where its instances are): PSNR
   // inside the objects' masks and outside them (nova eval's columns). The objects' PSNR is in
-  // the table and the CSV, the background's in accuracy.json.
+  // the table and the CSV, the background's in accuracy.json. And how opaque the objects
+  // render inside their masks (nova eval's opacity; accuracy.json only).
   double cam0_object_psnr = kNaN, cam0_background_psnr = kNaN;
   double heldout_object_psnr = kNaN, heldout_background_psnr = kNaN;
   double compose_object_psnr = kNaN;
+  double cam0_object_opacity = kNaN, heldout_object_opacity = kNaN, compose_object_opacity = kNaN;
   int cam0_views = 0, heldout_views = 0, compose_views = 0;
   // What `nova eval` reports by default: camera 0 where the scene has it, else held-out views.
   double psnr() const { return std::isfinite(cam0_psnr) ? cam0_psnr : heldout_psnr; }

@@ -220,14 +220,17 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
   if (!cam0_scores.empty()) {
     std::tie(r.cam0_psnr, r.cam0_ssim) = mean_scores(cam0_scores);
     std::tie(r.cam0_object_psnr, r.cam0_background_psnr) = mean_region_scores(cam0_scores);
+    r.cam0_object_opacity = mean_object_opacity(cam0_scores);
   }
   if (!held_scores.empty()) {
     std::tie(r.heldout_psnr, r.heldout_ssim) = mean_scores(held_scores);
     std::tie(r.heldout_object_psnr, r.heldout_background_psnr) = mean_region_scores(held_scores);
+    r.heldout_object_opacity = mean_object_opacity(held_scores);
   }
   if (!compose_scores.empty()) {
     r.compose_psnr = mean_scores(compose_scores).first;
     r.compose_object_psnr = mean_region_scores(compose_scores).first;
+    r.compose_object_opacity = mean_object_opacity(compose_scores);
   }
   r.cam0_views = static_cast<int>(cam0_scores.size());
   r.heldout_views = static_cast<int>(held_scores.size());

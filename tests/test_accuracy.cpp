@@ -155,6 +155,7 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   rs[1].heldout_object_psnr = 16.12346, rs[1].heldout_background_psnr = 22.5;
   rs[0].cam0_object_psnr = 15.25, rs[0].cam0_background_psnr = 21.0;
   rs[0].compose_object_psnr = 14.5;
+  rs[0].cam0_object_opacity = 0.875;
   const std::vector<SetSummary> sets = aggregate(rs);
   const std::string csv = csv_text(rs, sets);
   std::vector<SceneResult> back;
@@ -201,6 +202,8 @@ BOOST_AUTO_TEST_CASE(csv_and_json_read_back) {
   BOOST_TEST(scenes[0].at("heldout_object_psnr").is_null());
   BOOST_TEST(scenes[0].at("cam0_object_psnr").get<double>() == 15.25);
   BOOST_TEST(scenes[1].at("cam0_background_psnr").is_null());
+  BOOST_TEST(scenes[0].at("cam0_object_opacity").get<double>() == 0.875);
+  BOOST_TEST(scenes[0].at("heldout_object_opacity").is_null());
   std::vector<std::string> set_names;
   for (const auto& v : t.at("sets")) set_names.push_back(v.at("set").get<std::string>());
   BOOST_TEST(set_names == (std::vector<std::string>{"dev", "real", "all"}), boost::test_tools::per_element());
@@ -238,6 +241,8 @@ BOOST_AUTO_TEST_CASE(runs_on_a_tiny_synthetic_scene) {
   const nlohmann::json scene = nlohmann::json::parse(read_all(fs::path(out) / "accuracy.json")).at("scenes").at(0);
   BOOST_TEST(scene.at("cam0_object_psnr").get<double>() > 5.0);
   BOOST_TEST(scene.at("cam0_background_psnr").get<double>() > 5.0);
+  BOOST_TEST(scene.at("cam0_object_opacity").get<double>() > 0.0);
+  BOOST_TEST(scene.at("cam0_object_opacity").get<double>() <= 1.0 + 1e-6);
   BOOST_TEST(r.err.find("PSNR camera 0 ") != std::string::npos);
   BOOST_TEST(r.err.find("PSNR camera 0 objects ") != std::string::npos, r.err);
   BOOST_TEST(std::isfinite(rs[0].compose_object_psnr));
