@@ -85,28 +85,14 @@ Mat3 trained_turn(const std::vector<float>& rows, int frames, int k, int a, int 
   return multiply(transpose(euler_xyz_to_matrix(angles(b))), euler_xyz_to_matrix(angles(a)));
 }
 
-Vec3 turn_point(const Mat3& r, const Vec3& x) {
-  Vec3 y{};
-  for (size_t i = 0; i < 3; ++i)
-    for (size_t k = 0; k < 3; ++k) y[i] += r[i * 3 + k] * x[k];
-  return y;
-}
-
 double distance(const Vec3& a, const Vec3& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
 
-// A world point of frame a carried to frame b by a trained trajectory: R_b^T R_a (x - tau_a) + tau_b.
+// A world point of frame a carried to frame b by a trained trajectory: into the canonical
+// space at a's time, out of it at b's.
 Vec3 trained_carry(const std::vector<float>& rows, int frames, int k, int a, int b, const Vec3& x) {
   const float* m = &rows[size_t(k - 1) * size_t(frames) * 6];
-  const Vec3 d{x[0] - m[a * 6 + 3], x[1] - m[a * 6 + 4], x[2] - m[a * 6 + 5]};
-  const Vec3 y = turn_point(trained_turn(rows, frames, k, a, b), d);
-  return {y[0] + m[b * 6 + 3], y[1] + m[b * 6 + 4], y[2] + m[b * 6 + 5]};
-}
-
-// The same by two object-to-world poses: P_b P_a^-1 x.
-Vec3 pose_carry(const Mat34& pa, const Mat34& pb, const Vec3& x) {
-  const Vec3 local = turn_point(transpose(rotation_of(pa)), {x[0] - pa[3], x[1] - pa[7], x[2] - pa[11]});
-  const Vec3 y = turn_point(rotation_of(pb), local);
-  return {y[0] + pb[3], y[1] + pb[7], y[2] + pb[11]};
+  const Vec3 canonical = motion_to_canonical(m, frames, frame_time(a, frames), x);
+  return apply_rigid(invert_rigid(motion_matrix(m, frames, frame_time(b, frames))), canonical);
 }
 
 // Which of the scene's objects follows each true object: the one sharing the most pixels with
@@ -170,19 +156,19 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       }
     }
   }
-  // A generator point in the loaded world: scaled, turned by Rc, moved so that the cameras agree.
-  const auto loaded = [&, t0 = Vec3{}]() mutable {
+  // A generator point in the loaded world: scaled, turned by Rc, moved so that camera 0's
+  // centres agree (x -> scale Rc x + t).
+  Mat34 loaded{};
+  for (size_t i = 0; i < 3; ++i)
+    for (size_t k = 0; k < 3; ++k) loaded[i * 4 + k] = scale * Rc[i * 3 + k];
+  {
     const Camera c = world.camera(0);
-    const Vec3 p = turn_point(Rc, {c.position(0), c.position(1), c.position(2)});
-    for (size_t i = 0; i < 3; ++i) t0[i] = scene.frames[0].camera.position(int(i)) - scale * p[i];
-    return [=](const Vec3& x) {
-      const Vec3 y = turn_point(Rc, x);
-      return Vec3{scale * y[0] + t0[0], scale * y[1] + t0[1], scale * y[2] + t0[2]};
-    };
-  }();
+    const Vec3 p = apply_rigid(loaded, {c.position(0), c.position(1), c.position(2)});
+    for (size_t i = 0; i < 3; ++i) loaded[i * 4 + 3] = scene.frames[0].camera.position(int(i)) - p[i];
+  }
   const auto true_centre = [&](int k, int i) {
     const Pose34 p = world.object_pose(k, frame_time(i, F));
-    return loaded({p[3], p[7], p[11]});
+    return apply_rigid(loaded, {p[3], p[7], p[11]});
   };
   auto true_turn = [&](int k, int a, int b) {  // object k's turn from frame a to b, loaded world
     const Mat3 r = multiply(rotation_of(world.object_pose(k, frame_time(b, F))),
@@ -234,7 +220,9 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       s.true_turn += degrees(truth) / (b - a);
       s.mean_error += e;
       s.worst_error = std::max(s.worst_error, e);
-      s.shift += distance(pose_carry(poses[j - 1], poses[j], true_centre(k, a)), true_centre(k, b)) / radius;
+      // P_b P_a^-1 carries frame a's point to frame b.
+      s.shift += distance(apply_rigid(poses[j], apply_rigid(invert_rigid(poses[j - 1]), true_centre(k, a))),
+                          true_centre(k, b)) / radius;
       ++s.pairs;
     }
     const Mat3 chain = seen.empty() ? Mat3{1, 0, 0, 0, 1, 0, 0, 0, 1}
