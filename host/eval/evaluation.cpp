@@ -172,29 +172,26 @@ std::pair<double, double> mean_scores(const std::vector<ViewScore>& s) {
   return {s.empty() ? 0 : p / s.size(), s.empty() ? 0 : q / s.size()};
 }
 
-std::pair<double, double> mean_region_scores(const std::vector<ViewScore>& s) {
-  const auto mean = [&](double ViewScore::*field) {
-    double sum = 0;
-    int n = 0;
-    for (const ViewScore& x : s)
-      if (std::isfinite(x.*field)) {
-        sum += x.*field;
-        ++n;
-      }
-    return n ? sum / n : std::nan("");
-  };
-  return {mean(&ViewScore::object_psnr), mean(&ViewScore::background_psnr)};
-}
+namespace {
 
-double mean_object_opacity(const std::vector<ViewScore>& s) {
+// The mean of one score over the views where it is finite (NaN where none is).
+double finite_mean_of(const std::vector<ViewScore>& s, double ViewScore::*field) {
   double sum = 0;
   int n = 0;
   for (const ViewScore& x : s)
-    if (std::isfinite(x.object_opacity)) {
-      sum += x.object_opacity;
+    if (std::isfinite(x.*field)) {
+      sum += x.*field;
       ++n;
     }
   return n ? sum / n : std::nan("");
 }
+
+}  // namespace
+
+std::pair<double, double> mean_region_scores(const std::vector<ViewScore>& s) {
+  return {finite_mean_of(s, &ViewScore::object_psnr), finite_mean_of(s, &ViewScore::background_psnr)};
+}
+
+double mean_object_opacity(const std::vector<ViewScore>& s) { return finite_mean_of(s, &ViewScore::object_opacity); }
 
 }  // namespace nova
