@@ -285,6 +285,42 @@ BOOST_AUTO_TEST_CASE(depth_term_waits_for_depth_start) {
   }
 }
 
+// depth-ramp: the depth term's share of w-depth rises linearly from depth-start, and a share
+// of 0 trains exactly as no depth term (the first pretraining step of a ramp is bit-identical
+// to w-depth 0), while the ramp's later steps do not.
+BOOST_AUTO_TEST_CASE(depth_ramp_scales_the_depth_term) {
+  TrainConfig w;
+  for (long s : {0L, 5L, 100L}) BOOST_TEST(w.depth_weight_at(s) == 1.0);
+  w.depth_start = 2;
+  w.depth_ramp = 4;
+  const std::vector<double> expected{0, 0, 0, 0.25, 0.5, 0.75, 1, 1, 1};
+  for (size_t s = 0; s < expected.size(); ++s) BOOST_TEST(w.depth_weight_at(static_cast<long>(s)) == expected[s]);
+  w.depth_ramp = 0;
+  BOOST_TEST(w.depth_weight_at(1) == 0.0);
+  BOOST_TEST(w.depth_weight_at(2) == 1.0);
+
+  const Scene scene = tiny_scene();
+  BOOST_REQUIRE(disparity_usable(ray_geometry(scene)));
+  const auto parameters = [&](float w_depth, int ramp, long steps) {
+    TempDir dir("depth_ramp");
+    TrainConfig c = short_config(12, 0, 64, 8);
+    c.w_depth = w_depth;
+    c.depth_ramp = ramp;
+    Trainer t(runtime(), scene, c, (dir / "run").string());
+    t.run({}, steps);
+    return t.checkpoint();
+  };
+  const auto same = [](const Checkpoint& a, const Checkpoint& b) {
+    BOOST_REQUIRE(a.arrays.size() == b.arrays.size());
+    for (size_t i = 0; i < a.arrays.size(); ++i)
+      if (!same_bits(a.arrays[i].values, b.arrays[i].values)) return false;
+    return true;
+  };
+  BOOST_TEST(same(parameters(0.5f, 10, 1), parameters(0.0f, 0, 1)));
+  BOOST_TEST(!same(parameters(0.5f, 10, 3), parameters(0.0f, 0, 3)));
+  BOOST_TEST(!same(parameters(0.5f, 10, 3), parameters(0.5f, 0, 3)));
+}
+
 // A rigid object starts where its masks are: on entering the joint phase every frame's
 // anchor (the motion's translation) projects into that frame inside the object's mask, and
 // in front of the camera; its first frame is unturned (it fixes the canonical space), and

@@ -2,6 +2,7 @@
 // graph entirely, so it costs nothing and cannot produce a gradient.
 #include "nova/loss/objective.hpp"
 #include "nova/loss/terms.hpp"
+#include "nova/ops/tensor/tensor_ops.hpp"
 #include "nova/runtime/error.hpp"
 #include "nova/sampling/rigid_motion.hpp"
 
@@ -105,7 +106,11 @@ void add_depth_prior(Objective& o, const RenderedRays& r, const PriorWeights& p,
                      GradientReducer* ranks) {
   if (p.depth <= 0.0f || !disparity) return;
   disparity->make();
-  o.add("depth", depth_loss(r.out.depth, disparity->target, disparity->valid, ranks), p.depth);
+  const Tensor l = depth_loss(r.out.depth, disparity->target, disparity->valid, ranks);
+  if (!p.depth_scheduled) return o.add("depth", l, p.depth);
+  disparity->weight = disparity->graph->input("depth_weight", Shape{1});
+  o.terms.emplace_back("depth", l);  // logged at full weight, trained at the step's share
+  o.total = weighted_sum({o.total, scale_columns(l, disparity->weight)}, {1.0f, p.depth});
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ PriorWeights prior_weights(const TrainConfig& c) {
 void take_objective(StepGraph& s, Objective o, const DisparityTargets& disparity) {
   s.target_depth = disparity.target;
   s.depth_valid = disparity.valid;
+  s.depth_weight = disparity.weight;
   s.terms = std::move(o.terms);
   s.loss = o.total;
 }
@@ -85,7 +86,9 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   Tensor raw = static_raw(smp.positions[0], smp.viewdirs[0], scene_field(c.field, geo), s->pack_static);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, pretrain_render_options(c.conventions));
   DisparityTargets disparity{&g, R, {}, {}};
-  Objective o = pretrain_objective({out, raw, smp.delta, smp.z, s->noise}, s->target_rgb, prior_weights(c),
+  PriorWeights priors = prior_weights(c);
+  priors.depth_scheduled = c.depth_ramp > 0;
+  Objective o = pretrain_objective({out, raw, smp.delta, smp.z, s->noise}, s->target_rgb, priors,
                                    disparity_usable(geo) ? &disparity : nullptr, slice.ranks);
   s->psnr_mse = o.term("static_rgb");
   take_objective(*s, std::move(o), disparity);

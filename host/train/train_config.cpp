@@ -279,6 +279,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("depth-start", "pretraining steps before the depth term enters (0: from the first step)", 0, kBig,
                          [](TrainConfig& c) -> int& { return c.depth_start; }));
   o.back().before = "0";
+  o.push_back(int_option("depth-ramp", "pretraining steps from depth-start over which the depth term's weight rises linearly from 0 to w-depth (0: full from depth-start)", 0, kBig,
+                         [](TrainConfig& c) -> int& { return c.depth_ramp; }));
+  o.back().before = "0";
   o.push_back(float_option("w-depth", "weight of the depth loss against the scene's disparity maps, up to scale and shift (NDC scenes with disp/ only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_depth; }));
   o.push_back(bool_option("occupancy", "skip empty space: occupancy grids from the density, samples in empty cells never reach an MLP",
@@ -311,6 +314,12 @@ std::vector<ConfigOption> make_options() {
 const std::vector<ConfigOption>& config_options() {
   static const std::vector<ConfigOption> options = make_options();
   return options;
+}
+
+double TrainConfig::depth_weight_at(long phase_step) const {
+  if (phase_step < depth_start) return 0.0;
+  if (depth_ramp <= 0) return 1.0;
+  return std::min(1.0, static_cast<double>(phase_step - depth_start) / depth_ramp);
 }
 
 void set_config_value(TrainConfig& c, const std::string& key, const std::string& value) {

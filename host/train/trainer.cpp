@@ -191,6 +191,8 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     if (!joint && phase_step < c.depth_start) std::fill(d.valid.begin(), d.valid.end(), 0.0f);
     exec_->set(graph_->target_depth, d.target);
     exec_->set(graph_->depth_valid, d.valid);
+    if (graph_->depth_weight.valid())
+      exec_->set(graph_->depth_weight, std::vector<float>{static_cast<float>(c.depth_weight_at(phase_step))});
   }
   if (graph_->target_nerf_rgb.valid())
     exec_->set(graph_->target_nerf_rgb, detail::nerf_rgb_targets(frame, drawn.nerf_images, batch, N, R));

@@ -99,6 +99,9 @@ struct Objective {
 struct PriorWeights {
   float depth = 0, free_space = 0, distortion = 0, motion_smooth = 0;
   float free_space_margin = 0.05f, free_space_behind = 0;
+  // The depth term's weight is depth times a [1] data input (DisparityTargets::weight) set
+  // every step: a schedule without rebuilding the graph.
+  bool depth_scheduled = false;
 };
 
 // The per-ray targets of the depth and free-space priors, inputs of `graph` made on first use
@@ -107,6 +110,7 @@ struct DisparityTargets {
   Graph* graph = nullptr;
   size_t rays = 0;
   Tensor target, valid;
+  Tensor weight;  // [1], with PriorWeights::depth_scheduled: the depth term's share this step
   void make();
 };
 

@@ -30,6 +30,9 @@ struct StepGraph {
   // The targets of the depth and free-space terms (when either is built): minus the disparity
   // per ray, and 1 where it applies (0 on augmented steps, whose warped views have no disparity).
   Tensor target_depth, depth_valid;
+  // [1] with TrainConfig::depth_ramp (pretraining): the depth term's share of w_depth this
+  // step (TrainConfig::depth_weight_at).
+  Tensor depth_weight;
   // [N, R, 3] each NeRF's own target colour: only under LossConventions::nerf_rgb_area.
   Tensor target_nerf_rgb;
   // The objects' rigid trajectories (motion.hpp) when the field has them: a parameter the

@@ -43,6 +43,12 @@ struct TrainConfig : ModelConfig {
   // standardises the rendered depth over the batch, so while the field is still a flat haze
   // its gradient is divided by a near-zero spread and can hold the colours there.
   int depth_start = 0;
+  // Pretraining steps from depth_start over which the depth term's weight rises linearly from
+  // 0 to w_depth: a weight at full strength from the first steps can hold the field at a
+  // haze of the images' mean colour while the colours have formed no surface yet.
+  int depth_ramp = 0;
+  // The depth term's share of w_depth at pretraining step `phase_step` (0-based).
+  double depth_weight_at(long phase_step) const;
   // Distortion loss (losses.hpp) of each object NeRF on its mask's rays in joint training: a
   // prior for one surface per ray against streaks (not in the reference: 0 there).
   float w_distortion = 0.0f;
