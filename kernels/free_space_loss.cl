@@ -57,6 +57,15 @@ __kernel void free_space_fit(__global const float* p, __global const float* t,
   fit[1] = b;
 }
 
+// The fit of a target that already is the surface in the rendered depth's units (the scene's
+// disparity placed once for the whole video): z* = 0 + 1 t.
+__kernel void free_space_fit_identity(__global float* work, uint at, uint R) {
+  if (get_global_id(0) != 0) return;
+  work[at] = 0.0f;
+  work[at + 1] = 1.0f;
+  work[at + 2] = (float)R;
+}
+
 __kernel void free_space_partial(__global const float* raw, __global const float* delta,
                                  __global const float* z, __global const float* t,
                                  __global const float* valid, __global const float* mask,

@@ -16,6 +16,7 @@ struct FreeSpaceCase {
   float margin = 0.05f, behind = 0.0f;
   std::vector<float> raw, delta, z, depth, target, valid, masks, noise;  // noise may be empty
   bool per_nerf_delta = true;
+  bool fitted = true;  // false: target is the surface itself (z* = target)
 };
 
 // The op table's case (op_table_ray_losses.cpp, op_table_ranks.cpp): N NeRFs x R rays x S
@@ -70,14 +71,14 @@ inline double free_space_reference(const FreeSpaceCase& f, const std::vector<flo
     const double w = f.valid[r] * f.masks[r];
     n += w, sp += w * f.depth[r], st += w * f.target[r];
   }
-  if (n < 2) return 0;
+  if (f.fitted && n < 2) return 0;
   const double mp = sp / n, mt = st / n;
   double cov = 0, vt = 0;
-  for (size_t r = 0; r < f.R; ++r) {
+  for (size_t r = 0; r < f.R && f.fitted; ++r) {
     const double w = f.valid[r] * f.masks[r];
     cov += w * (f.depth[r] - mp) * (f.target[r] - mt), vt += w * (f.target[r] - mt) * (f.target[r] - mt);
   }
-  const double b = cov / (vt + 1e-6 * n), a = mp - b * mt;
+  const double b = f.fitted ? cov / (vt + 1e-6 * n) : 1.0, a = f.fitted ? mp - b * mt : 0.0;
   double sum = 0;
   for (size_t k = f.first; k < f.N; ++k)
     for (size_t r = 0; r < f.R; ++r) {
@@ -139,7 +140,7 @@ inline FreeSpaceRun run_free_space(const FreeSpaceCase& f, Runtime& rt, bool dep
   Tensor zero = g.input("zero", Shape{R});
   Tensor depth_mse = depth_also_in_mse ? mse(depth, zero) : Tensor{};
   Tensor fs = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, f.first,
-                              f.behind, ranks);
+                              f.behind, ranks, f.fitted);
   g.keep(fs);
   g.set_loss(depth_also_in_mse ? weighted_sum({depth_mse, fs}, {1.0f, 1.0f}) : fs);
   Executor ex(rt, g, guarded_options());

@@ -109,14 +109,16 @@ OpEntry distortion_entry() {
 // and float32 chains of S terms). Variant 0: 2 NeRFs x 1009 rays x 3, the table's case
 // (free_space_table_case, step 1e-3); 1-3: 3 NeRFs x 37 rays x 11 of the op's own cases
 // (free_space_random_case, step 1e-4 on sigmas kept 0.3 from the ReLU kink), plain, with
-// density noise, and with weight behind the surface (behind 0.7).
+// density noise, with weight behind the surface (behind 0.7), and with the surface given (no
+// fit: targets in [0.2, 0.9], inside the samples' span, so both sides of it are exercised).
 OpEntry free_space_entry() {
   OpEntry e;
   e.name = "free_space_loss";
   e.shapes = {{{2, kOddRows, 3}, 0, "2 NeRFs x 1009 rays x 3"},
               {{3, 37, 11}, 1, "3 NeRFs x 37 rays x 11"},
               {{3, 37, 11}, 2, "3 NeRFs x 37 rays x 11, noise"},
-              {{3, 37, 11}, 3, "3 NeRFs x 37 rays x 11, behind 0.7"}};
+              {{3, 37, 11}, 3, "3 NeRFs x 37 rays x 11, behind 0.7"},
+              {{3, 37, 11}, 4, "3 NeRFs x 37 rays x 11, surface given"}};
   e.build = [](Graph& g, const OpShape& s) { return free_space_graph(g, s, nullptr); };
   e.values = free_space_values;
   e.flops = [](const OpShape& s) { return double(s.dims[0] * s.dims[1] * s.dims[2]) * 40; };
@@ -129,6 +131,10 @@ FreeSpaceCase free_space_case(const OpShape& s) {
   if (s.variant == 0) return free_space_table_case(s.dims[0], s.dims[1], s.dims[2]);
   FreeSpaceCase f = free_space_random_case(s.dims[0], s.dims[1], s.dims[2], s.variant == 2, 10 * unsigned(s.variant));
   f.behind = s.variant == 3 ? 0.7f : 0.0f;
+  if (s.variant == 4) {
+    f.fitted = false;
+    f.target = random_floats(f.R, 0.2f, 0.9f, 44);
+  }
   return f;
 }
 
@@ -146,7 +152,7 @@ OpGraph free_space_graph(Graph& g, const OpShape& s, GradientReducer* ranks) {
   Tensor z = g.input("z", Shape{R, S}), depth = g.input("depth", Shape{R}), target = g.input("target", Shape{R});
   Tensor valid = g.input("valid", Shape{R}), masks = g.input("masks", Shape{N, R});
   Tensor noise = f.noise.empty() ? Tensor{} : g.input("noise", Shape{N, R * S});
-  Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, 1, f.behind, ranks);
+  Tensor l = free_space_loss(raw, delta, z, depth, target, valid, masks, noise, f.margin, 1, f.behind, ranks, f.fitted);
   std::vector<Tensor> inputs = {raw, delta, z, depth, target, valid, masks};
   if (noise.valid()) inputs.push_back(noise);
   return OpGraph{inputs, {l}, l};

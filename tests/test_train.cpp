@@ -18,6 +18,7 @@
 #include "nova/train/trainer.hpp"
 #include "nova/model/view_renderer.hpp"
 #include "scene_test_util.hpp"
+#include "train/step_batch.hpp"
 
 namespace nova::test {
 namespace {
@@ -319,6 +320,49 @@ BOOST_AUTO_TEST_CASE(depth_ramp_scales_the_depth_term) {
   BOOST_TEST(same(parameters(0.5f, 10, 1), parameters(0.0f, 0, 1)));
   BOOST_TEST(!same(parameters(0.5f, 10, 3), parameters(0.0f, 0, 3)));
   BOOST_TEST(!same(parameters(0.5f, 10, 3), parameters(0.5f, 0, 3)));
+}
+
+// free-space-scene-fit: the surface of a pixel is the NDC t of its disparity placed by the fit.
+// A camera at the origin looking down -z: the centre pixel's point lies at world z = -1 / w,
+// so t = 1 - w exactly; a pixel off-centre at the same inverse depth lies at the same z (the
+// depth is along the view axis). w <= 0 reads 1 (infinity), a point before the near plane 0.
+// Trained, the option changes the joint steps (the free-space term reads another surface).
+BOOST_AUTO_TEST_CASE(free_space_surface_from_the_scene_fit) {
+  Frame f;
+  f.camera.width = 5, f.camera.height = 3;
+  f.camera.fx = f.camera.fy = 4, f.camera.cx = 2, f.camera.cy = 1;
+  f.disparity.width = 5, f.disparity.height = 3;
+  f.disparity.data = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, -0.5f, 0.4f, 0.25f, 0.9f, 2.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+  DisparityFit fit;
+  fit.ok = true, fit.scale = 2.0, fit.shift = -0.1;
+  const std::vector<float> map = detail::surface_map(f, fit);
+  BOOST_REQUIRE(map.size() == 15u);
+  BOOST_TEST(map[7] == 1.0 - (2.0 * 0.25 - 0.1), boost::test_tools::tolerance(1e-6));  // centre
+  BOOST_TEST(map[6] == 1.0 - (2.0 * 0.4 - 0.1), boost::test_tools::tolerance(1e-6));
+  BOOST_TEST(map[5] == 1.0f);   // w = -1.1: at or beyond infinity
+  BOOST_TEST(map[9] == 0.0f);   // w = 3.9: nearer than the near plane
+  BOOST_TEST(map[1] == 1.0 - (2.0 * 0.2 - 0.1), boost::test_tools::tolerance(1e-6));
+  PixelBatch b;
+  b.pixels = {2, 1, 1, 1};
+  const std::vector<float> t = detail::surface_targets(map, 5, b, 2);
+  BOOST_TEST(t[0] == map[7]);
+  BOOST_TEST(t[1] == map[6]);
+
+  const Scene scene = tiny_scene();
+  const auto parameters = [&](bool scene_fit) {
+    TempDir dir("free_space_surface");
+    TrainConfig c = short_config(4, 3, 64, 8);
+    c.w_free_space = 1.0f;
+    c.free_space_scene_fit = scene_fit;
+    Trainer t(runtime(), scene, c, (dir / "run").string());
+    t.run({}, 7);
+    return t.checkpoint();
+  };
+  const Checkpoint a = parameters(false), b2 = parameters(true);
+  BOOST_REQUIRE(a.arrays.size() == b2.arrays.size());
+  bool same = true;
+  for (size_t i = 0; i < a.arrays.size(); ++i) same = same && same_bits(a.arrays[i].values, b2.arrays[i].values);
+  BOOST_TEST(!same);
 }
 
 // A rigid object starts where its masks are: on entering the joint phase every frame's

@@ -14,8 +14,8 @@ namespace {
 // batch's moments of the fit (data-parallel training)].
 class FreeSpaceLossOp final : public Op {
  public:
-  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin, float behind, bool moments)
-      : l_(l), noise_(noise), margin_(margin), behind_(behind), moments_(moments) {}
+  FreeSpaceLossOp(detail::RaySampleLayout l, bool noise, float margin, float behind, bool moments, bool fitted)
+      : l_(l), noise_(noise), margin_(margin), behind_(behind), moments_(moments), fitted_(fitted) {}
   std::string type() const override { return "free_space_loss"; }
 
   void forward(ExecContext& ctx) override {
@@ -63,6 +63,11 @@ class FreeSpaceLossOp final : public Op {
   // The disparity-to-depth fit of this pass, written after the first `at` floats of the
   // workspace (where the pass's kernel reads it).
   void fit_disparity(ExecContext& ctx, size_t at) const {
+    if (!fitted_) {
+      ctx.launch("free_space_loss", "free_space_fit_identity")
+          .arg(ctx.workspace()).arg(detail::u32(at, "free-space workspace")).arg(detail::u32(l_.rays, "rays")).run(1);
+      return;
+    }
     if (moments_) {
       ctx.launch("rank_moments", "free_space_fit_from_moments")
           .arg(ctx.in(moments_at())).arg(ctx.in(moments_at() + 1)).arg(ctx.workspace())
@@ -80,13 +85,14 @@ class FreeSpaceLossOp final : public Op {
   bool noise_;
   float margin_, behind_;
   bool moments_;
+  bool fitted_;
 };
 
 }  // namespace
 
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise, float margin,
-                       size_t first_nerf, float behind, GradientReducer* ranks) {
+                       size_t first_nerf, float behind, GradientReducer* ranks, bool fitted) {
   const auto l = detail::ray_sample_layout("free_space_loss", raw, delta, z, noise, first_nerf);
   const auto bad = [](const std::string& what) { throw Error("free_space_loss: " + what, kExitInternal); };
   for (const Tensor& t : {depth, target, valid})
@@ -103,14 +109,14 @@ Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor 
   Tensor y = g.activation(raw.info().name + ".free_space_loss", Shape{1});
   std::vector<Tensor> inputs = {raw, delta, z, depth, target, valid, masks};
   if (noise.valid()) inputs.push_back(noise);
-  const bool split = ranks && ranks->size() > 1;
+  const bool split = fitted && ranks && ranks->size() > 1;
   if (split) {  // the fit's weights: valid rays of the background (masks row 0)
     // The fit is a constant, as the rendered depth it places: its moments take no gradient.
     const detail::BatchMoments m = detail::batch_moments(depth, target, valid, masks, *ranks, /*constant=*/true);
     inputs.push_back(m.first);
     inputs.push_back(m.second);
   }
-  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin, behind, split), inputs, {y});
+  g.add(std::make_unique<FreeSpaceLossOp>(l, noise.valid(), margin, behind, split, fitted), inputs, {y});
   return y;
 }
 

@@ -139,9 +139,12 @@ Objective joint_objective(const RenderedRays& r, const NovelViewTargets& targets
   // With `ranks` the disparity fit is the whole batch's.
   if (p.free_space > 0.0f && disparity) {
     disparity->make();
+    const bool given = p.free_space_surface_given;
+    if (given) disparity->surface = disparity->graph->input("free_space_surface", Shape{disparity->rays});
     o.add("free_space",
-          free_space_loss(r.raw, r.delta, r.z, r.out.depth, disparity->target, disparity->valid, targets.masks,
-                          r.noise, p.free_space_margin, 1, p.free_space_behind, ranks),
+          free_space_loss(r.raw, r.delta, r.z, r.out.depth, given ? disparity->surface : disparity->target,
+                          disparity->valid, targets.masks, r.noise, p.free_space_margin, 1, p.free_space_behind,
+                          ranks, !given),
           p.free_space);
   }
   if (motion.valid() && p.motion_smooth > 0.0f)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "nova/sampling/camera.hpp"
 #include "nova/train/augment.hpp"
 
 namespace nova::detail {
@@ -83,6 +84,33 @@ DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t R
       d.target[r] = -frame.disparity.data[y * static_cast<size_t>(frame.disparity.width) + x];
     }
   return d;
+}
+
+std::vector<float> surface_map(const Frame& frame, const DisparityFit& fit) {
+  const int W = frame.disparity.width, H = frame.disparity.height;
+  std::vector<float> map(static_cast<size_t>(W) * H);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const size_t i = static_cast<size_t>(y) * W + x;
+      const double w = fit.inverse_depth(frame.disparity.data[i]);
+      if (!(w > 0.0)) {
+        map[i] = 1.0f;
+        continue;
+      }
+      // NDC t of a world point is 1 + near / z (kernels/sampling.cl), near = 1.
+      const double z = camera_unproject(frame.camera, x, y, 1.0 / w)[2];
+      map[i] = z < -1.0 ? static_cast<float>(1.0 + 1.0 / z) : 0.0f;
+    }
+  return map;
+}
+
+std::vector<float> surface_targets(const std::vector<float>& map, int width, const PixelBatch& batch, size_t rays) {
+  std::vector<float> t(rays);
+  for (size_t r = 0; r < rays; ++r) {
+    const size_t x = static_cast<size_t>(batch.pixels[2 * r]), y = static_cast<size_t>(batch.pixels[2 * r + 1]);
+    t[r] = map[y * static_cast<size_t>(width) + x];
+  }
+  return t;
 }
 
 std::vector<float> nerf_rgb_targets(const Frame& frame, const std::vector<Image8>& nerf_images,

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "nova/model/scene.hpp"
+#include "nova/train/disparity_fit.hpp"
 #include "nova/train/pixel_batch.hpp"
 #include "nova/train/train_config.hpp"
 
@@ -38,6 +39,14 @@ struct DepthTargets {
   std::vector<float> target, valid;
 };
 DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t rays, bool augmented);
+
+// The free-space surface of every pixel of `frame` (row-major), forward-facing scenes (NDC
+// with the near plane at 1): the NDC t of the point at camera-space depth 1 / w, w = the
+// fitted inverse depth of the pixel's disparity; 1 (infinity) where w <= 0, 0 where the point
+// is not beyond the near plane.
+std::vector<float> surface_map(const Frame& frame, const DisparityFit& fit);
+// The batch's rays' values of a frame's surface_map.
+std::vector<float> surface_targets(const std::vector<float>& map, int width, const PixelBatch& batch, size_t rays);
 
 // Each NeRF's target colour of every ray [nerfs, rays, 3]: from its own warped view, or the
 // frame where `nerf_images` is empty.

@@ -29,6 +29,7 @@ PriorWeights prior_weights(const TrainConfig& c) {
   p.free_space_behind = c.free_space_behind;
   p.distortion = c.w_distortion;
   p.motion_smooth = c.w_motion_smooth;
+  p.free_space_surface_given = c.free_space_scene_fit;
   return p;
 }
 
@@ -37,6 +38,7 @@ void take_objective(StepGraph& s, Objective o, const DisparityTargets& disparity
   s.target_depth = disparity.target;
   s.depth_valid = disparity.valid;
   s.depth_weight = disparity.weight;
+  s.free_space_surface = disparity.surface;
   s.terms = std::move(o.terms);
   s.loss = o.total;
 }

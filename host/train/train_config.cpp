@@ -276,6 +276,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(float_option("free-space-behind", "free-space loss: weight of object weight more than the margin behind the disparity's surface, relative to in front (0: in front only)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.free_space_behind; }));
   o.back().before = "0";
+  o.push_back(bool_option("free-space-scene-fit", "free-space loss: each ray's surface is the disparity placed by the scene's photometric fit (the one the objects' start uses) instead of fitted to the static NeRF's rendered depth over each batch",
+                          [](TrainConfig& c) -> bool& { return c.free_space_scene_fit; }));
+  o.back().before = "false";
   o.push_back(int_option("depth-start", "pretraining steps before the depth term enters (0: from the first step)", 0, kBig,
                          [](TrainConfig& c) -> int& { return c.depth_start; }));
   o.back().before = "0";

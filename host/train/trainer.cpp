@@ -56,6 +56,15 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
       std::all_of(regions_.begin(), regions_.end(), [](const auto& r) { return r[0].empty(); }))
     throw Error("scene '" + scene.source + "': the object masks cover every pixel of every frame, so the static " +
                 "NeRF has no background pixel to pretrain on");
+  if (config_.free_space_scene_fit && config_.w_free_space > 0.0f && config_.steps > 0 &&
+      geometry_.num_objects > 0 && disparity_usable(geometry_)) {
+    const DisparityFit fit = fit_disparity(scene);
+    if (!fit.ok)
+      throw Error("option 'free-space-scene-fit': scene '" + scene.source + "': its disparity could not be placed " +
+                  "by its cameras (no fit beats a constant depth: too little parallax); use the per-batch fit " +
+                  "(--free-space-scene-fit false)");
+    for (const Frame& f : scene.frames) surfaces_.push_back(detail::surface_map(f, fit));
+  }
   if (config_.occupancy) {
     occupancy_ = std::make_unique<OccupancyEstimator>(geometry_.num_objects, config_.occupancy_res,
                                                       scene_field(config_.field, geometry_).occupancy_bound,
@@ -191,6 +200,9 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     if (!joint && phase_step < c.depth_start) std::fill(d.valid.begin(), d.valid.end(), 0.0f);
     exec_->set(graph_->target_depth, d.target);
     exec_->set(graph_->depth_valid, d.valid);
+    if (graph_->free_space_surface.valid())
+      exec_->set(graph_->free_space_surface,
+                 detail::surface_targets(surfaces_.at(drawn.frame), frame.disparity.width, batch, R));
     if (graph_->depth_weight.valid())
       exec_->set(graph_->depth_weight, std::vector<float>{static_cast<float>(c.depth_weight_at(phase_step))});
   }

@@ -102,6 +102,9 @@ struct PriorWeights {
   // The depth term's weight is depth times a [1] data input (DisparityTargets::weight) set
   // every step: a schedule without rebuilding the graph.
   bool depth_scheduled = false;
+  // The free-space loss's surface per ray is given (DisparityTargets::surface, in the rendered
+  // depth's units) instead of fitted to the rendered depth over each batch.
+  bool free_space_surface_given = false;
 };
 
 // The per-ray targets of the depth and free-space priors, inputs of `graph` made on first use
@@ -111,6 +114,7 @@ struct DisparityTargets {
   size_t rays = 0;
   Tensor target, valid;
   Tensor weight;  // [1], with PriorWeights::depth_scheduled: the depth term's share this step
+  Tensor surface;  // [R], with PriorWeights::free_space_surface_given: each ray's surface
   void make();
 };
 

@@ -73,10 +73,12 @@ Tensor distortion_loss(Tensor raw, Tensor delta, Tensor z, Tensor masks = {}, Te
 // surface, is pulled to the disparity's depth too. raw, delta, z, masks, noise as
 // distortion_loss; depth, target, valid [R] as depth_loss. With `ranks` of more than one rank
 // the fit is the whole batch's, as depth_loss's statistics (the mean over (NeRF, ray) pairs
-// needs nothing more: each rank has the same share of them).
+// needs nothing more: each rank has the same share of them). With `fitted` false the target
+// is the surface itself in the rendered depth's units (z*_r = target_r, no fit; depth unused).
 Tensor free_space_loss(Tensor raw, Tensor delta, Tensor z, Tensor depth, Tensor target,
                        Tensor valid, Tensor masks, Tensor noise = {}, float margin = 0.05f,
-                       size_t first_nerf = 1, float behind = 0.0f, GradientReducer* ranks = nullptr);
+                       size_t first_nerf = 1, float behind = 0.0f, GradientReducer* ranks = nullptr,
+                       bool fitted = true);
 
 // Per-NeRF mask loss of the reference code: sum over NeRFs n of the mean over rays r of
 // |mask_n(r) - target_n(r)|. mask [N, R] (render_composite's), target [N, R] (data).

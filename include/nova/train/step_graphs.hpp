@@ -33,6 +33,8 @@ struct StepGraph {
   // [1] with TrainConfig::depth_ramp (pretraining): the depth term's share of w_depth this
   // step (TrainConfig::depth_weight_at).
   Tensor depth_weight;
+  // [R] with TrainConfig::free_space_scene_fit (joint steps): each ray's free-space surface.
+  Tensor free_space_surface;
   // [N, R, 3] each NeRF's own target colour: only under LossConventions::nerf_rgb_area.
   Tensor target_nerf_rgb;
   // The objects' rigid trajectories (motion.hpp) when the field has them: a parameter the

@@ -69,6 +69,11 @@ struct TrainConfig : ModelConfig {
   // Weight more than the margin *behind* that depth costs free_space_behind times as much: an
   // object pushed back along the one camera's rays renders the same training image.
   float free_space_behind = 0.0f;
+  // The free-space loss's surface on each ray: false, the disparity in the rendered depth's
+  // units by a least-squares fit of the static NeRF's rendered depth over each batch's
+  // background rays (it follows the static NeRF, haze and all); true, the disparity placed once
+  // by the scene's photometric fit (fit_disparity, as the objects' start), at its NDC t.
+  bool free_space_scene_fit = false;
   // With a rigid object motion (FieldConfig::motion): weight of the trajectories' smoothness
   // (second differences of the per-frame motion, motion_smoothness).
   float w_motion_smooth = 0.0f;

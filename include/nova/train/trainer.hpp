@@ -95,6 +95,7 @@ class Trainer {
   bool profile_ = false;
   bool config_written_ = false;
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
+  std::vector<std::vector<float>> surfaces_;  // per frame with free_space_scene_fit (surface_map)
   // Empty-space skipping (config_.occupancy): the grids of the static and object NeRFs.
   std::unique_ptr<OccupancyEstimator> occupancy_;  // with TrainConfig::occupancy
   GradientReducer* reducer_ = nullptr;
