@@ -88,6 +88,22 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
+// The checkpoint of `steps` steps of `c` on `scene` in a run folder of its own.
+Checkpoint trained_for(const Scene& scene, const TrainConfig& c, long steps) {
+  TempDir dir("trained_for");
+  Trainer t(runtime(), scene, c, (dir / "run").string());
+  t.run({}, steps);
+  return t.checkpoint();
+}
+
+// Whether two checkpoints hold the same arrays, bit for bit.
+bool same_parameters(const Checkpoint& a, const Checkpoint& b) {
+  if (a.arrays.size() != b.arrays.size()) return false;
+  for (size_t i = 0; i < a.arrays.size(); ++i)
+    if (a.arrays[i].name != b.arrays[i].name || !same_bits(a.arrays[i].values, b.arrays[i].values)) return false;
+  return true;
+}
+
 }  // namespace
 
 BOOST_AUTO_TEST_SUITE(train)
@@ -303,23 +319,14 @@ BOOST_AUTO_TEST_CASE(depth_ramp_scales_the_depth_term) {
   const Scene scene = tiny_scene();
   BOOST_REQUIRE(disparity_usable(ray_geometry(scene)));
   const auto parameters = [&](float w_depth, int ramp, long steps) {
-    TempDir dir("depth_ramp");
     TrainConfig c = short_config(12, 0, 64, 8);
     c.w_depth = w_depth;
     c.depth_ramp = ramp;
-    Trainer t(runtime(), scene, c, (dir / "run").string());
-    t.run({}, steps);
-    return t.checkpoint();
+    return trained_for(scene, c, steps);
   };
-  const auto same = [](const Checkpoint& a, const Checkpoint& b) {
-    BOOST_REQUIRE(a.arrays.size() == b.arrays.size());
-    for (size_t i = 0; i < a.arrays.size(); ++i)
-      if (!same_bits(a.arrays[i].values, b.arrays[i].values)) return false;
-    return true;
-  };
-  BOOST_TEST(same(parameters(0.5f, 10, 1), parameters(0.0f, 0, 1)));
-  BOOST_TEST(!same(parameters(0.5f, 10, 3), parameters(0.0f, 0, 3)));
-  BOOST_TEST(!same(parameters(0.5f, 10, 3), parameters(0.5f, 0, 3)));
+  BOOST_TEST(same_parameters(parameters(0.5f, 10, 1), parameters(0.0f, 0, 1)));
+  BOOST_TEST(!same_parameters(parameters(0.5f, 10, 3), parameters(0.0f, 0, 3)));
+  BOOST_TEST(!same_parameters(parameters(0.5f, 10, 3), parameters(0.5f, 0, 3)));
 }
 
 // free-space-scene-fit: the surface of a pixel is the NDC t of its disparity placed by the fit.
@@ -348,21 +355,11 @@ BOOST_AUTO_TEST_CASE(free_space_surface_from_the_scene_fit) {
   BOOST_TEST(t[0] == map[7]);
   BOOST_TEST(t[1] == map[6]);
 
-  const Scene scene = tiny_scene();
-  const auto parameters = [&](bool scene_fit) {
-    TempDir dir("free_space_surface");
-    TrainConfig c = short_config(4, 3, 64, 8);
-    c.w_free_space = 1.0f;
-    c.free_space_scene_fit = scene_fit;
-    Trainer t(runtime(), scene, c, (dir / "run").string());
-    t.run({}, 7);
-    return t.checkpoint();
-  };
-  const Checkpoint a = parameters(false), b2 = parameters(true);
-  BOOST_REQUIRE(a.arrays.size() == b2.arrays.size());
-  bool same = true;
-  for (size_t i = 0; i < a.arrays.size(); ++i) same = same && same_bits(a.arrays[i].values, b2.arrays[i].values);
-  BOOST_TEST(!same);
+  TrainConfig c = short_config(4, 3, 64, 8);
+  c.w_free_space = 1.0f;
+  const Checkpoint batch_fit = trained_for(tiny_scene(), c, 7);
+  c.free_space_scene_fit = true;
+  BOOST_TEST(!same_parameters(batch_fit, trained_for(tiny_scene(), c, 7)));
 }
 
 // A rigid object starts where its masks are: on entering the joint phase every frame's
