@@ -212,10 +212,10 @@ std::vector<MotionRow> fill_motion_rows(const std::vector<int>& known, const std
 }
 
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
-                           int samples, Executor& trained) {
+                           int samples, Executor& trained, const DisparityFit* known_fit) {
   const int K = geo.num_objects, F = motion_options(geo).frames;
   if (K < 1) throw Error("initial_motion: the scene has no objects", kExitInternal);
-  const DisparityFit fit = geo.disparity ? fit_disparity(scene) : DisparityFit{};
+  const DisparityFit fit = !geo.disparity ? DisparityFit{} : known_fit ? *known_fit : fit_disparity(scene);
   const bool fitted = fit.ok;
   // Without a fit: the static NeRF's depth behind the objects' masks.
   std::vector<std::vector<Pixel>> inside(scene.frames.size());

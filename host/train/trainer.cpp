@@ -58,7 +58,7 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
                 "NeRF has no background pixel to pretrain on");
   if (config_.free_space_scene_fit && config_.w_free_space > 0.0f && config_.steps > 0 &&
       geometry_.num_objects > 0 && disparity_usable(geometry_)) {
-    const DisparityFit fit = fit_disparity(scene);
+    const DisparityFit& fit = disparity_fit_.emplace(fit_disparity(scene));
     if (!fit.ok)
       throw Error("option 'free-space-scene-fit': scene '" + scene.source + "': its disparity could not be placed " +
                   "by its cameras (no fit beats a constant depth: too little parallax); use the per-batch fit " +
@@ -151,7 +151,8 @@ void Trainer::ensure_phase(bool joint) {
   // NeRF that pretraining made: at the joint phase's first step only (a resume loads the
   // trained motion instead).
   if (g->motion.valid() && step_ == config_.pretrain_steps) {
-    const MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e);
+    const MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e,
+                                               disparity_fit_ ? &*disparity_fit_ : nullptr);
     e->set(g->motion, start.rows);
     for (Tensor p : g->graph.parameters()) {
       if (p.info().name == kObjectBoxName) e->set(p, start.boxes);

@@ -10,6 +10,7 @@
 #include "nova/runtime/runtime.hpp"
 #include "nova/model/scene.hpp"
 #include "nova/sampling/rigid_motion.hpp"
+#include "nova/train/disparity_fit.hpp"
 
 namespace nova {
 
@@ -34,8 +35,9 @@ struct MotionStart {
   std::vector<float> boxes;  // [K, 6]: each object's box (FieldConfig::object_box), object_box_row
   std::vector<float> radii;  // [K]: each object's radius in world units (kObjectRadiusName)
 };
+// `fit`: the scene's fit_disparity when the caller has it already (null: computed here).
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
-                           int samples, Executor& trained);
+                           int samples, Executor& trained, const DisparityFit* fit = nullptr);
 
 // The box_coordinates row (c, l) of a cube of half-size `half` (world units) about the world
 // point `centre`: the box about the centre's image that holds the cube's image (in NDC the

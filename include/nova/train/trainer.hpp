@@ -6,6 +6,7 @@
 // so that a resumed run continues bit for bit as if it had not stopped).
 #include <functional>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "nova/graph/executor.hpp"
 #include "nova/graph/distributed.hpp"
 #include "nova/model/occupancy_estimator.hpp"
+#include "nova/train/disparity_fit.hpp"
 #include "nova/train/optim.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/runtime/runtime.hpp"
@@ -96,6 +98,7 @@ class Trainer {
   bool config_written_ = false;
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
   std::vector<std::vector<float>> surfaces_;  // per frame with free_space_scene_fit (surface_map)
+  std::optional<DisparityFit> disparity_fit_;  // fit_disparity, once computed for surfaces_
   // Empty-space skipping (config_.occupancy): the grids of the static and object NeRFs.
   std::unique_ptr<OccupancyEstimator> occupancy_;  // with TrainConfig::occupancy
   GradientReducer* reducer_ = nullptr;
