@@ -104,6 +104,23 @@ std::vector<float> surface_map(const Frame& frame, const DisparityFit& fit) {
   return map;
 }
 
+void to_object_fronts(std::vector<float>& map, const std::vector<Image8>& masks) {
+  std::vector<float> front(map.size(), 2.0f);  // 2: no object's
+  std::vector<float> t;
+  for (size_t k = 1; k < masks.size(); ++k) {
+    t.clear();
+    for (size_t i = 0; i < map.size(); ++i)
+      if (masks[k].data[i] >= 128 && map[i] > 0.0f && map[i] < 1.0f) t.push_back(map[i]);
+    if (t.empty()) continue;
+    const auto q = t.begin() + static_cast<std::ptrdiff_t>(kFrontQuantile * static_cast<double>(t.size() - 1));
+    std::nth_element(t.begin(), q, t.end());
+    for (size_t i = 0; i < map.size(); ++i)
+      if (masks[k].data[i] >= 128) front[i] = std::min(front[i], *q);
+  }
+  for (size_t i = 0; i < map.size(); ++i)
+    if (front[i] < 2.0f) map[i] = front[i];
+}
+
 std::vector<float> surface_targets(const std::vector<float>& map, int width, const PixelBatch& batch, size_t rays) {
   std::vector<float> t(rays);
   for (size_t r = 0; r < rays; ++r) {

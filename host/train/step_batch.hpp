@@ -45,6 +45,13 @@ DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t r
 // fitted inverse depth of the pixel's disparity; 1 (infinity) where w <= 0, 0 where the point
 // is not beyond the near plane.
 std::vector<float> surface_map(const Frame& frame, const DisparityFit& fit);
+// free-space-front: every pixel of object k's mask (masks[k] >= 128, k >= 1) takes the object's
+// front, the kFrontQuantile quantile (nearest first) of the map's finite values over that mask;
+// a pixel in two masks takes the nearer front. The tenth nearest rather than the nearest: a
+// blurred disparity map's rim pixels lie behind an object's front, not in front of it, but a
+// single pixel's noise can lie anywhere.
+inline constexpr double kFrontQuantile = 0.1;
+void to_object_fronts(std::vector<float>& map, const std::vector<Image8>& masks);
 // The batch's rays' values of a frame's surface_map.
 std::vector<float> surface_targets(const std::vector<float>& map, int width, const PixelBatch& batch, size_t rays);
 

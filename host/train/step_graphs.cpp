@@ -87,7 +87,7 @@ std::unique_ptr<StepGraph> build_pretrain_graph(const TrainConfig& c, const RayG
   s->pack_static = new_select(c.occupancy, {0});
   Tensor raw = static_raw(smp.positions[0], smp.viewdirs[0], scene_field(c.field, geo), s->pack_static);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, pretrain_render_options(c.conventions));
-  DisparityTargets disparity{&g, R, {}, {}};
+  DisparityTargets disparity{&g, R, {}, {}, {}, {}};
   PriorWeights priors = prior_weights(c);
   priors.depth_scheduled = c.depth_ramp > 0;
   Objective o = pretrain_objective({out, raw, smp.delta, smp.z, s->noise}, s->target_rgb, priors,
@@ -141,7 +141,7 @@ std::unique_ptr<StepGraph> build_joint_graph(const TrainConfig& c, const RayGeom
   Tensor raw = stack({raw_static, raw_objects});
   const RenderOptions ro = joint_render_options(c.conventions, c.weights);
   RenderOutputs out = render_composite(raw, smp.delta, smp.z, s->noise, ro);
-  DisparityTargets disparity{&g, R, {}, {}};
+  DisparityTargets disparity{&g, R, {}, {}, {}, {}};
   Objective o = joint_objective({out, raw, smp.delta, smp.z, s->noise},
                                 {s->target_rgb, s->target_masks, s->target_nerf_rgb}, c.weights, ro, c.conventions,
                                 prior_weights(c), disparity_usable(geo) ? &disparity : nullptr, s->motion,

@@ -279,6 +279,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(bool_option("free-space-scene-fit", "free-space loss: each ray's surface is the disparity placed by the scene's photometric fit (the one the objects' start uses) instead of fitted to the static NeRF's rendered depth over each batch",
                           [](TrainConfig& c) -> bool& { return c.free_space_scene_fit; }));
   o.back().before = "false";
+  o.push_back(bool_option("free-space-front", "free-space-scene-fit: an object's surface in a frame is its front (the nearest tenth of its mask's placed disparity) instead of each pixel's own",
+                          [](TrainConfig& c) -> bool& { return c.free_space_front; }));
+  o.back().before = "false";
   o.push_back(int_option("depth-start", "pretraining steps before the depth term enters (0: from the first step)", 0, kBig,
                          [](TrainConfig& c) -> int& { return c.depth_start; }));
   o.back().before = "0";
@@ -358,6 +361,9 @@ void validate(const TrainConfig& c) {
   if (c.object_samples > 0 && c.field.motion != ObjectMotion::Rigid)
     throw Error("option 'object-samples': samples crowd about where a rigid object's motion puts it; it needs "
                 "'object-motion rigid' (object-motion is " + std::string(object_motion_name(c.field.motion)) + ")");
+  if (c.free_space_front && !c.free_space_scene_fit)
+    throw Error("option 'free-space-front': an object's front is read from the disparity placed by the scene's fit; "
+                "it needs 'free-space-scene-fit true'");
   const NovelViewLossWeights& w = c.weights;
   if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");

@@ -59,11 +59,17 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   if (config_.free_space_scene_fit && config_.w_free_space > 0.0f && config_.steps > 0 &&
       geometry_.num_objects > 0 && disparity_usable(geometry_)) {
     const DisparityFit& fit = disparity_fit_.emplace(fit_disparity(scene));
-    if (!fit.ok)
-      throw Error("option 'free-space-scene-fit': scene '" + scene.source + "': its disparity could not be placed " +
-                  "by its cameras (no fit beats a constant depth: too little parallax); use the per-batch fit " +
-                  "(--free-space-scene-fit false)");
-    for (const Frame& f : scene.frames) surfaces_.push_back(detail::surface_map(f, fit));
+    if (fit.ok) {
+      for (const Frame& f : scene.frames) {
+        surfaces_.push_back(detail::surface_map(f, fit));
+        if (config_.free_space_front) detail::to_object_fronts(surfaces_.back(), f.masks);
+      }
+    } else {
+      // Too little parallax to place the disparity (no depth explains the frames better than a
+      // constant): the per-batch fit, which needs no placement, stands in, and the run's
+      // config.ini says so.
+      config_.free_space_scene_fit = config_.free_space_front = false;
+    }
   }
   if (config_.occupancy) {
     occupancy_ = std::make_unique<OccupancyEstimator>(geometry_.num_objects, config_.occupancy_res,

@@ -74,6 +74,11 @@ struct TrainConfig : ModelConfig {
   // background rays (it follows the static NeRF, haze and all); true, the disparity placed once
   // by the scene's photometric fit (fit_disparity, as the objects' start), at its NDC t.
   bool free_space_scene_fit = false;
+  // With free_space_scene_fit: an object's surface in a frame is its front (the nearest tenth of
+  // its mask's surface, detail::to_object_fronts) instead of each pixel's own. A disparity
+  // blurred over an object's silhouette places its rim part way to the background, behind the
+  // object's front, where a per-pixel surface would count the object's own rim as free space.
+  bool free_space_front = false;
   // With a rigid object motion (FieldConfig::motion): weight of the trajectories' smoothness
   // (second differences of the per-frame motion, motion_smoothness).
   float w_motion_smooth = 0.0f;
