@@ -595,10 +595,9 @@ const GridRun& grid_run() {
     // so the model is trained without them (docs/known-issues.md).
     c.static_background_only = false;
     c.w_free_space = 0.0f;
-    // The depth term at full weight from the first step: with quick's ramp (150 steps, beyond
+    // The depth term at full weight from the first step: with quick's ramp (250 steps, beyond
     // this model's 100 of pretraining) the static NeRF is another model, on which the floors
-    // below were not set (with a ramp of 250: skipped against full 25.5 dB, the objects' grids
-    // not empty).
+    // below were not set (skipped against full 25.5 dB, the objects' grids not empty).
     c.depth_ramp = 0;
     // With the box that holds every training ray (hash-ndc-box-from-rays) this 250-step model
     // also keeps haze in the box's outer cells, which the grids drop (skipped against full
