@@ -352,7 +352,7 @@ BOOST_AUTO_TEST_CASE(free_space_surface_from_the_scene_fit) {
   BOOST_TEST(map[1] == 1.0 - (2.0 * 0.2 - 0.1), boost::test_tools::tolerance(1e-6));
   PixelBatch b;
   b.pixels = {2, 1, 1, 1};
-  const std::vector<float> t = detail::surface_targets(map, 5, b, 2);
+  const std::vector<float> t = detail::values_at_pixels(map, 5, b, 2);
   BOOST_TEST(t[0] == map[7]);
   BOOST_TEST(t[1] == map[6]);
 

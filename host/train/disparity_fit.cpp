@@ -10,6 +10,7 @@
 #include "nova/sampling/camera.hpp"
 #include "train/float_plane.hpp"
 #include "train/parallel_for.hpp"
+#include "train/percentile.hpp"
 
 namespace nova {
 namespace {
@@ -102,13 +103,6 @@ class ProjectionCost {
   std::vector<Sample> samples_;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const size_t i = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size() - 1)));
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(i), v.end());
-  return v[i];
-}
-
 }  // namespace
 
 DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& options) {
@@ -120,7 +114,7 @@ DisparityFit fit_disparity(const Scene& scene, const DisparityFitOptions& option
   if (samples.size() < 16) return fit;
   std::vector<double> disparity;
   for (const Sample& s : samples) disparity.push_back(s.disparity);
-  const double d_lo = percentile(disparity, 0.05), d_hi = percentile(disparity, 0.95);
+  const double d_lo = detail::percentile(disparity, 0.05), d_hi = detail::percentile(disparity, 0.95);
   if (!(d_hi > d_lo)) return fit;
 
   // Inverse depths inside the scene's bounds, widened (the bounds are COLMAP's or a guess).

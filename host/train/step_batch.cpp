@@ -5,6 +5,7 @@
 
 #include "nova/sampling/camera.hpp"
 #include "nova/train/augment.hpp"
+#include "train/percentile.hpp"
 
 namespace nova::detail {
 
@@ -77,12 +78,10 @@ PixelBatch slice_batch(const PixelBatch& batch, size_t R, size_t a, size_t n) {
 DepthTargets depth_targets(const Frame& frame, const PixelBatch& batch, size_t R, bool augmented) {
   // A warped (augmented) view has no disparity map, so its rays carry no depth term.
   DepthTargets d{std::vector<float>(R, 0.0f), std::vector<float>(R, augmented ? 0.0f : 1.0f)};
-  if (!augmented)
-    for (size_t r = 0; r < R; ++r) {
-      const size_t x = static_cast<size_t>(batch.pixels[2 * r]);
-      const size_t y = static_cast<size_t>(batch.pixels[2 * r + 1]);
-      d.target[r] = -frame.disparity.data[y * static_cast<size_t>(frame.disparity.width) + x];
-    }
+  if (!augmented) {
+    d.target = values_at_pixels(frame.disparity.data, frame.disparity.width, batch, R);
+    for (float& v : d.target) v = -v;
+  }
   return d;
 }
 
@@ -112,22 +111,21 @@ void to_object_fronts(std::vector<float>& map, const std::vector<Image8>& masks)
     for (size_t i = 0; i < map.size(); ++i)
       if (masks[k].data[i] >= 128 && map[i] > 0.0f && map[i] < 1.0f) t.push_back(map[i]);
     if (t.empty()) continue;
-    const auto q = t.begin() + static_cast<std::ptrdiff_t>(kFrontQuantile * static_cast<double>(t.size() - 1));
-    std::nth_element(t.begin(), q, t.end());
+    const float f = percentile(t, kFrontQuantile);
     for (size_t i = 0; i < map.size(); ++i)
-      if (masks[k].data[i] >= 128) front[i] = std::min(front[i], *q);
+      if (masks[k].data[i] >= 128) front[i] = std::min(front[i], f);
   }
   for (size_t i = 0; i < map.size(); ++i)
     if (front[i] < 2.0f) map[i] = front[i];
 }
 
-std::vector<float> surface_targets(const std::vector<float>& map, int width, const PixelBatch& batch, size_t rays) {
-  std::vector<float> t(rays);
+std::vector<float> values_at_pixels(const std::vector<float>& plane, int width, const PixelBatch& batch, size_t rays) {
+  std::vector<float> v(rays);
   for (size_t r = 0; r < rays; ++r) {
     const size_t x = static_cast<size_t>(batch.pixels[2 * r]), y = static_cast<size_t>(batch.pixels[2 * r + 1]);
-    t[r] = map[y * static_cast<size_t>(width) + x];
+    v[r] = plane[y * static_cast<size_t>(width) + x];
   }
-  return t;
+  return v;
 }
 
 std::vector<float> nerf_rgb_targets(const Frame& frame, const std::vector<Image8>& nerf_images,

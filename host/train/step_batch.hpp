@@ -52,8 +52,9 @@ std::vector<float> surface_map(const Frame& frame, const DisparityFit& fit);
 // single pixel's noise can lie anywhere.
 inline constexpr double kFrontQuantile = 0.1;
 void to_object_fronts(std::vector<float>& map, const std::vector<Image8>& masks);
-// The batch's rays' values of a frame's surface_map.
-std::vector<float> surface_targets(const std::vector<float>& map, int width, const PixelBatch& batch, size_t rays);
+// The values of a row-major plane `width` pixels wide (a frame's disparity, its surface_map) at
+// the batch's first `rays` pixels.
+std::vector<float> values_at_pixels(const std::vector<float>& plane, int width, const PixelBatch& batch, size_t rays);
 
 // Each NeRF's target colour of every ray [nerfs, rays, 3]: from its own warped view, or the
 // frame where `nerf_images` is empty.

@@ -209,7 +209,7 @@ void Trainer::train_step(bool log, TrainProgress& p) {
     exec_->set(graph_->depth_valid, d.valid);
     if (graph_->free_space_surface.valid())
       exec_->set(graph_->free_space_surface,
-                 detail::surface_targets(surfaces_.at(drawn.frame), frame.disparity.width, batch, R));
+                 detail::values_at_pixels(surfaces_.at(drawn.frame), frame.disparity.width, batch, R));
     if (graph_->depth_weight.valid())
       exec_->set(graph_->depth_weight, std::vector<float>{static_cast<float>(c.depth_weight_at(phase_step))});
   }
