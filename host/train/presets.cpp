@@ -31,7 +31,7 @@ TrainConfig preset_config(const std::string& name) {
   // (every seed up), held-out cameras 1.47 and the composition targets 1.72; on the test seeds
   // +0.22, +0.09 and +0.38 (two of four up on camera 0). The main job takes 217 s instead of
   // 147: the hash grids' Adam update and the launches do not grow with the batch
-  // (docs/accuracy.md).
+  // (docs/accuracy-studies.md).
   c.rays = 512;
   c.samples = 32;
   c.pretrain_steps = 500;
@@ -46,15 +46,15 @@ TrainConfig preset_config(const std::string& name) {
   // wall pretraining fit its rays to 18.5 dB with 0.04 and 20.3 without), while the family's
   // held-out cameras need the depth (dev seed 2: 20.9 dB held out with 0.04, 18.5 without).
   // Chosen on the dev seeds (camera 0 +0.54 dB, held-out cameras +0.79, composition +0.58 on
-  // average, every seed up on camera 0) and nvidia_balloon1 (+0.33); docs/accuracy.md.
+  // average, every seed up on camera 0) and nvidia_balloon1 (+0.33); docs/accuracy-studies.md.
   c.w_depth = 0.02f;
   // The depth weight rises over the first 250 pretraining steps: at full weight from the start
   // it can hold the static NeRF at a haze of the images' mean colour (dev seed 4: 18.3 dB on
   // its training rays after pretraining, 25.5 with the ramp), and a static haze holds the
-  // objects translucent where they pass (docs/accuracy.md, "A ramp of the depth weight"). 150
+  // objects translucent where they pass (docs/accuracy-studies.md, "A ramp of the depth weight"). 150
   // steps free dev seed 4 as well and read level on the dev seeds and 0.29 dB higher inside
   // nvidia_balloon1's masks, but leave test seed 103's pretraining stalled (its objects 0.44
-  // opaque against 0.88; docs/accuracy.md, "The ramp's length").
+  // opaque against 0.88; docs/accuracy-studies.md, "The ramp's length").
   c.depth_ramp = 250;
   // An object seen from one camera per time can keep weight anywhere along that camera's
   // rays in front of its surface; from camera 0 of the default synthetic scene that haze was
@@ -64,7 +64,7 @@ TrainConfig preset_config(const std::string& name) {
   // With the ramp, on the dev seeds inside the objects +0.96 dB from camera 0, +1.34 from the
   // held-out cameras, +0.81 in the compositions (every seed up or level) against the per-batch
   // fit to the static NeRF's depth without the ramp; nvidia_balloon1 -0.43 inside its masks
-  // over two streams (docs/accuracy.md, "The objects' front as the free-space surface").
+  // over two streams (docs/accuracy-studies.md, "The objects' front as the free-space surface").
   c.w_free_space = 1.0f;
   c.free_space_scene_fit = true;
   c.free_space_front = true;
@@ -76,12 +76,12 @@ TrainConfig preset_config(const std::string& name) {
   // hash-collision noise seen from camera 0. On the default synthetic scene these took
   // camera-0 PSNR from 24.03 dB to 25.36 (time cells) and 27.18 (object grid); on
   // nvidia_balloon1 the object grid's finest level changed nothing at 240 or 480 pixels wide
-  // (18.61 / 17.86 dB against 18.59 / 17.82 at 512 cells; docs/accuracy.md).
+  // (18.61 / 17.86 dB against 18.59 / 17.82 at 512 cells; docs/training.md, "Object grids").
   c.field.hash_time_auto = true;
   c.field.object_max_resolution = 32;
   // A rigid object's canonical field is seen by every frame's camera: 128 cells put every dev
   // seed ahead inside the objects against 32 (camera 0 +0.27 to +0.54 dB, held-out cameras
-  // +0.10 to +0.79); nvidia_balloon1, whose objects are not rigid, loses 0.45 (docs/accuracy.md).
+  // +0.10 to +0.79); nvidia_balloon1, whose objects are not rigid, loses 0.45 (docs/accuracy-studies.md).
   c.field.canonical_max_resolution = 128;
   // Objects are rigid shapes moved by a learned motion: one shape that every frame's camera
   // trains, with a colour that may change as the object turns under the scene's light, a
@@ -90,7 +90,7 @@ TrainConfig preset_config(const std::string& name) {
   // Against the (x, y, z, t) field on the dev seeds: inside the objects +2.06 dB from camera
   // 0 and +3.49 from the held-out cameras, whole frame +0.73, compositions +0.50;
   // nvidia_balloon1 (held-out frames) +0.60 inside its masks, +0.24 whole frame
-  // (docs/accuracy.md, "Rigid objects"). The test seeds, reported only: inside the objects
+  // (docs/accuracy-studies.md, "Rigid objects"). The test seeds, reported only: inside the objects
   // +1.43 and +2.10, whole frame -0.39 and +0.16, compositions -1.87 (a turning rod whose
   // canonical shape fans out, docs/known-issues.md).
   c.field.motion = ObjectMotion::Rigid;
@@ -100,12 +100,12 @@ TrainConfig preset_config(const std::string& name) {
   // Each canonical grid spans a box of its own around its object (sized from the masks), so a
   // small object gets the grid's cells rather than a few of the scene's. On the dev seeds inside
   // the objects +0.23 dB from camera 0, +0.35 held out, +0.51 in the compositions (three seeds
-  // up, seed 4 level); nvidia_balloon1 -0.28 inside its masks (docs/accuracy.md).
+  // up, seed 4 level); nvidia_balloon1 -0.28 inside its masks (docs/accuracy-studies.md).
   c.field.object_box = true;
   c.augment_start = 200;
   // Every second joint step augmented (the reference: every third). Chosen on the family's dev
   // seeds (camera 0 +0.18 dB, composition +0.22 on average) and confirmed on the test seeds
-  // (+0.73 dB and +0.45 on average, all four up; docs/accuracy.md).
+  // (+0.73 dB and +0.45 on average, all four up; docs/accuracy-studies.md).
   c.augment_every = 2;
   // A cell counts as empty under alpha 0.1 over its width: on the default synthetic scene
   // this drops the static NeRF's low-density haze (which 0.01 keeps) and two thirds of the

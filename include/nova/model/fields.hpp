@@ -30,7 +30,7 @@ const char* encoding_name(Encoding e);  // "frequency", "hashgrid"
 // A time cell shared by about three neighbouring frames ties each object NeRF to three
 // viewpoints of a monocular video: on the default synthetic scene (24 frames) 8 cells gave
 // 25.36 dB camera-0 PSNR against 24.03 with a cell per frame and more at fine levels, on
-// nvidia_balloon1 (12 frames, novel times) 4 cells 18.59 dB against 17.01 (docs/accuracy.md).
+// nvidia_balloon1 (12 frames, novel times) 4 cells 18.59 dB against 17.01 (docs/training.md, docs/accuracy-studies.md).
 inline constexpr double kFramesPerTimeCell = 3.0;
 
 // Frequencies of the positional encodings a deformation network reads (position and time):

@@ -29,7 +29,7 @@ struct AlignmentOptions {
   int max_points = 1200;        // of the first view's pixels
   // Pixels of each mask's rim left out (at least 1), where a blurred disparity mixes the
   // object's depth with the background's. A 2-pixel rim follows the family's turns better
-  // and trains worse objects (docs/accuracy.md): 1.
+  // and trains worse objects (docs/accuracy-studies.md): 1.
   int edge_px = 1;
   double depth_weight = 1.0;    // a relative depth error of 10 % weighs as a colour error of 0.1
   double mask_weight = 0.5;     // a point outside the second mask weighs as a colour error of 0.5
