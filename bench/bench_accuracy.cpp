@@ -6,6 +6,7 @@
 // only with nova_io (scenes, metrics, pictures).
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -23,6 +24,7 @@
 #include "nova/runtime/runtime.hpp"
 #include "nova/train/trainer.hpp"
 #include "nova/model/view_renderer.hpp"
+#include "family_truth.hpp"
 #include "options.hpp"
 
 namespace nova::bench {
@@ -33,7 +35,8 @@ using clock_type = std::chrono::steady_clock;
 
 constexpr const char* kUsage =
     "usage: nova-bench accuracy [--scenes LIST] [--out DIR] [--preset quick|reference] [--config FILE]\n"
-    "                           [--set KEY=VALUE ...] [--data DIR] [--reuse] [--device SEL] [--dry-run]\n"
+    "                           [--set KEY=VALUE ...] [--data DIR] [--reuse] [--exact-motion] [--device SEL]\n"
+    "                           [--dry-run]\n"
     "\n"
     "Trains every scene of LIST with one configuration and evaluates it as nova eval does; prints\n"
     "per-scene and per-set PSNR / SSIM / training time and writes OUT/accuracy.csv,\n"
@@ -59,6 +62,9 @@ constexpr const char* kUsage =
     "                  options (factor, holdout); repeatable\n"
     "  --data DIR      the real scenes' folder (default: shared/data beside the repository)\n"
     "  --reuse         skip training where OUT/runs/NAME holds a finished run with the same config.ini\n"
+    "  --exact-motion  family scenes, rigid objects: start each object's trajectory from the\n"
+    "                  generator's exact motion instead of the frames' alignment (with --set\n"
+    "                  lr-motion=0 it is kept): how far a right motion takes the objects\n"
     "  --device SEL    OpenCL device, as nova's --device\n"
     "  --dry-run       print the plan and stop\n";
 
@@ -122,11 +128,16 @@ void ensure_synthetic(const SceneSpec& s, const std::string& dir) {
   std::cerr << "  " << write_synthetic_scene(dir, s.preset, s.seed, true) << "\n";
 }
 
-// Whether `run_dir` holds a finished run of exactly this configuration and scene.
-bool finished_run(const std::string& run_dir, const TrainConfig& config, const Scene& scene) {
+// A run started from the generator's exact motion (--exact-motion) holds this file: its
+// config.ini alone does not tell it from a run started from the frames' alignment.
+constexpr const char* kExactMotionMarker = "exact_motion.txt";
+
+// Whether `run_dir` holds a finished run of exactly this configuration, scene and start.
+bool finished_run(const std::string& run_dir, const TrainConfig& config, const Scene& scene, bool exact_motion) {
   const RunFolder run(run_dir);
   if (!fs::exists(run.checkpoint_path())) return false;
   if (read_text(run.config_path()) != run_config_text(config, scene.source)) return false;
+  if (fs::exists(run_dir + "/" + kExactMotionMarker) != exact_motion) return false;
   try {
     const Checkpoint ck = read_checkpoint(run.checkpoint_path());
     return std::stol(ck.get("step")) == long(config.pretrain_steps) + config.steps;
@@ -152,7 +163,7 @@ struct Evaluated {
   Image8 picture;
 };
 
-Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& run_dir, bool reuse) {
+Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& run_dir, bool reuse, bool exact_motion) {
   Evaluated ev;
   SceneResult& r = ev.result;
   r.name = p.spec.name;
@@ -160,7 +171,7 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
   // As nova train: the scene with the run's factor and hold-out split (and its ground truth).
   Scene scene = load_training_scene(p.source, p.config, true);
   const std::string seconds_file = run_dir + "/train_seconds.txt";
-  if (reuse && finished_run(run_dir, p.config, scene)) {
+  if (reuse && finished_run(run_dir, p.config, scene, exact_motion)) {
     r.status = "reused";
     try {
       r.train_s = std::stod(read_text(seconds_file));
@@ -174,6 +185,13 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
               << p.config.preset << ", " << p.config.pretrain_steps << " + " << p.config.steps << " steps\n";
     const auto t0 = clock_type::now();
     Trainer trainer(rt, scene, p.config, run_dir);
+    std::optional<SynthWorld> world;  // outlives the training that calls the hook
+    if (exact_motion) {
+      world.emplace(p.spec.preset, p.spec.seed);
+      trainer.set_motion_start_hook([&](MotionStart& start) { start.rows = exact_motion_rows(scene, *world, start.rows); });
+      fs::create_directories(run_dir);
+      write_atomically(run_dir + "/" + kExactMotionMarker, "started from the generator's exact motion (nova-bench accuracy --exact-motion)\n");
+    }
     trainer.run([](const TrainProgress& pr) { std::cerr << "  " << progress_line(pr) << "\n"; });
     r.train_s = since(t0);
     write_atomically(seconds_file, num(r.train_s, 3) + "\n");
@@ -273,7 +291,7 @@ int accuracy(const Args& raw_args) {
   std::vector<std::string> args = raw_args;
   const std::vector<std::string> sets = take_repeated(args, "set", "KEY=VALUE, a nova train option");
   const Options o(args, {{"scenes", "dev"}, {"out", "accuracy"}, {"preset", "quick"}, {"config", ""}, {"data", ""},
-                         {"device", ""}, {"reuse", "off"}, {"dry-run", "off"}});
+                         {"device", ""}, {"reuse", "off"}, {"exact-motion", "off"}, {"dry-run", "off"}});
   if (o.help()) {
     std::cout << kUsage;
     return 0;
@@ -319,6 +337,7 @@ int accuracy(const Args& raw_args) {
       if (k != "scene") throw Error(config_path + ": unknown option '" + k + "'");
   }
 
+  const bool exact_motion = o.flag("exact-motion");
   std::vector<SceneSpec> specs = parse_scene_list(o.str("scenes"));
   const std::string data = data_folder(o.str("data"));
   std::vector<Planned> plan;
@@ -343,6 +362,11 @@ int accuracy(const Args& raw_args) {
       for (const auto& [k, v] : s.protocol) set_config_value(p.config, k, v);
       for (const auto& [k, v] : overrides) set_config_value(p.config, k, v);
       validate(p.config);
+      if (exact_motion && !(s.synthetic && s.preset == "family"))
+        throw Error("--exact-motion needs family:SEED scenes, whose generator knows the objects' motion");
+      if (exact_motion && p.config.field.motion != ObjectMotion::Rigid)
+        throw Error("--exact-motion starts rigid objects; it needs 'object-motion rigid' (object-motion is " +
+                    std::string(object_motion_name(p.config.field.motion)) + ")");
     } catch (const Error& e) {
       throw Error("scene '" + s.name + "': " + e.what());
     }
@@ -353,6 +377,7 @@ int accuracy(const Args& raw_args) {
   std::string config_text = "preset " + base.preset;
   if (!config_path.empty()) config_text += ", --config " + config_path;
   for (const std::string& s : sets) config_text += ", " + s;
+  if (exact_motion) config_text += ", --exact-motion";
   const DeviceInfo device = select_device(o.str("device"));
   std::cout << "nova-bench accuracy: " << plan.size() << " scene" << (plan.size() > 1 ? "s" : "") << ", " << config_text
             << ", device " << device.name << "\n";
@@ -381,7 +406,7 @@ int accuracy(const Args& raw_args) {
     std::cerr << "\n";
     try {
       if (p.spec.synthetic) ensure_synthetic(p.spec, p.source);
-      Evaluated ev = train_and_evaluate(rt, p, out + "/runs/" + p.spec.dir_name(), o.flag("reuse"));
+      Evaluated ev = train_and_evaluate(rt, p, out + "/runs/" + p.spec.dir_name(), o.flag("reuse"), exact_motion);
       if (!ev.picture.empty()) write_png_atomically(out + "/pictures/" + p.spec.dir_name() + ".png", ev.picture);
       const SceneResult& r = ev.result;
       // Where the views' objects regions are known, the PSNR inside them first, then the frame's.
@@ -409,6 +434,7 @@ int accuracy(const Args& raw_args) {
   const std::vector<SetSummary> summaries = aggregate(results);
   std::vector<std::pair<std::string, std::string>> settings = {{"preset", base.preset}, {"config", config_path}};
   for (const auto& [k, v] : overrides) settings.emplace_back("set " + k, v);
+  if (exact_motion) settings.emplace_back("exact-motion", "on");
   settings.emplace_back("device", device.name);
   write_atomically(out + "/accuracy.csv", csv_text(results, summaries));
   write_atomically(out + "/accuracy.json", json_text(settings, results, summaries));

@@ -13,6 +13,7 @@
 #include <iostream>
 
 #include "bench.hpp"
+#include "family_truth.hpp"
 #include "options.hpp"
 #include "nova/sampling/camera.hpp"
 #include "nova/train/disparity_fit.hpp"
@@ -29,23 +30,6 @@ namespace nova::bench {
 namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
-
-Mat3 multiply(const Mat3& a, const Mat3& b) {
-  Mat3 c{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int l = 0; l < 3; ++l) c[size_t(i * 3 + j)] += a[size_t(i * 3 + l)] * b[size_t(l * 3 + j)];
-  return c;
-}
-
-Mat3 transpose(const Mat3& a) {
-  Mat3 c{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) c[size_t(i * 3 + j)] = a[size_t(j * 3 + i)];
-  return c;
-}
-
-Mat3 rotation_of(const std::array<double, 12>& p) { return {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]}; }
 
 double degrees(const Mat3& r) { return std::acos(std::clamp((r[0] + r[4] + r[8] - 1) / 2, -1.0, 1.0)) / kDegree; }
 
@@ -95,49 +79,15 @@ Vec3 trained_carry(const std::vector<float>& rows, int frames, int k, int a, int
   return apply_rigid(invert_rigid(motion_matrix(m, frames, frame_time(b, frames))), canonical);
 }
 
-// Which of the scene's objects follows each true object: the one sharing the most pixels with
-// it over the video (the scene's own numbering where its masks are the given ones).
-std::vector<int> match_objects(const Scene& scene, const SynthWorld& world) {
-  const int F = int(scene.frames.size()), K = int(scene.frames[0].masks.size()) - 1;
-  std::vector<std::vector<long>> shared(size_t(world.objects()) + 1, std::vector<long>(size_t(K) + 1, 0));
-  for (int i = 0; i < F; ++i) {
-    const auto truth = world.render(world.camera(i), frame_time(i, F)).masks;
-    for (int k = 1; k <= world.objects(); ++k)
-      for (int m = 1; m <= K; ++m) {
-        const Image8& a = truth[size_t(k)];
-        const Image8& b = scene.frames[size_t(i)].masks[size_t(m)];
-        for (size_t p = 0; p < a.data.size(); ++p) shared[size_t(k)][size_t(m)] += a.data[p] && b.data[p] >= 128;
-      }
-  }
-  std::vector<int> out(size_t(world.objects()) + 1, 0);
-  for (int k = 1; k <= world.objects(); ++k)
-    for (int m = 1; m <= K; ++m)
-      if (!out[size_t(k)] || shared[size_t(k)][size_t(m)] > shared[size_t(k)][size_t(out[size_t(k)])]) out[size_t(k)] = m;
-  return out;
-}
-
 std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact_depth, const std::string& run,
                                    const AlignmentOptions& options) {
   const Scene scene = load_scene(dir);
   const SynthWorld world("family", uint32_t(seed));
   const int F = int(scene.frames.size());
   const std::vector<int> scene_object = match_objects(scene, world);
-  // The loaded world is the generator's rotated by Rc and scaled (llff_poses.hpp's transform):
-  // both read off the cameras, so the truth's turns can be written in the loaded world.
-  const Mat3 Rc = multiply(rotation_of(scene.frames[0].camera.c2w), transpose(rotation_of(world.camera(0).c2w)));
-  double scale = 1;
-  {
-    double best = 0;
-    for (int i = 1; i < F; ++i) {
-      const Camera &a = scene.frames[0].camera, &b = scene.frames[size_t(i)].camera;
-      const Camera wa = world.camera(0), wb = world.camera(i);
-      const double dw = std::hypot(wa.position(0) - wb.position(0), wa.position(1) - wb.position(1), wa.position(2) - wb.position(2));
-      if (dw > best) {
-        best = dw;
-        scale = std::hypot(a.position(0) - b.position(0), a.position(1) - b.position(1), a.position(2) - b.position(2)) / dw;
-      }
-    }
-  }
+  const LoadedWorld loaded_frame = loaded_world(scene, world);
+  const Mat3& Rc = loaded_frame.turn;
+  const double scale = loaded_frame.scale;
   const DisparityFit fit = fit_disparity(scene);
   std::vector<ImageF> depth(static_cast<size_t>(F));
   for (int i = 0; i < F; ++i) {
@@ -156,16 +106,7 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       }
     }
   }
-  // A generator point in the loaded world: scaled, turned by Rc, moved so that camera 0's
-  // centres agree (x -> scale Rc x + t).
-  Mat34 loaded{};
-  for (size_t i = 0; i < 3; ++i)
-    for (size_t k = 0; k < 3; ++k) loaded[i * 4 + k] = scale * Rc[i * 3 + k];
-  {
-    const Camera c = world.camera(0);
-    const Vec3 p = apply_rigid(loaded, {c.position(0), c.position(1), c.position(2)});
-    for (size_t i = 0; i < 3; ++i) loaded[i * 4 + 3] = scene.frames[0].camera.position(int(i)) - p[i];
-  }
+  const Mat34& loaded = loaded_frame.point;
   const auto true_centre = [&](int k, int i) {
     const Pose34 p = world.object_pose(k, frame_time(i, F));
     return apply_rigid(loaded, {p[3], p[7], p[11]});

@@ -1,13 +1,17 @@
 // nova-bench accuracy: the scene list (sets expand, duplicates go, unknown names are errors),
 // the per-set aggregates on given numbers, the CSV and JSON read back; then the command on a
 // tiny synthetic scene with tiny networks (a run, a --reuse run that trains nothing and scores
-// the same) and its bad inputs (exit 2, one line naming the input, nothing written).
+// the same) and its bad inputs (exit 2, one line naming the input, nothing written); a family
+// scene started from the generator's exact motion and kept there (--exact-motion).
 #include <boost/test/unit_test.hpp>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
 #include "../bench/accuracy.hpp"
+#include "../bench/family_truth.hpp"
+#include "nova/data/scene_io.hpp"
+#include "nova/model/checkpoint.hpp"
 #include "nova/io/image_io.hpp"
 #include "scene_test_util.hpp"
 
@@ -299,6 +303,59 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_write_nothing) {
   BOOST_TEST(f.out.find("family:1") != std::string::npos, f.out);
   BOOST_TEST(f.out.find("family:104") != std::string::npos, f.out);
   BOOST_TEST(!fs::exists(out));
+}
+
+// The angle of a rotation, degrees.
+double angle_of(const Mat3& r) { return std::acos(std::clamp((r[0] + r[4] + r[8] - 1) / 2, -1.0, 1.0)) * 180.0 / M_PI; }
+
+BOOST_AUTO_TEST_CASE(exact_motion_starts_from_the_generators_motion) {
+  if (!has_bench()) return;
+  TempDir dir("accuracy-exact");
+  const std::string out = (dir / "a").string();
+  // lr-motion 0 keeps the start, so the trained trajectory is the start itself.
+  const Result r = bench_cli("--scenes family:1 --exact-motion --set lr-motion=0 --out " + out + kTiny, dir);
+  BOOST_REQUIRE_MESSAGE(r.code == 0, r.err);
+  BOOST_TEST(fs::exists(fs::path(out) / "runs/family-1/exact_motion.txt"));
+  BOOST_TEST(read_all(fs::path(out) / "accuracy.json").find("\"exact-motion\": \"on\"") != std::string::npos);
+  const Scene scene = load_scene((fs::path(out) / "scenes/family-1").string());
+  const SynthWorld world("family", 1);
+  const std::vector<float> rows = read_checkpoint((fs::path(out) / "runs/family-1/checkpoint.bin").string()).array("objects.motion").values;
+  const int F = int(scene.frames.size());
+  BOOST_REQUIRE(rows.size() == size_t(world.objects()) * size_t(F) * 6);
+  const std::vector<int> object = bench::match_objects(scene, world);
+  const bench::LoadedWorld loaded = bench::loaded_world(scene, world);
+  for (int k = 1; k <= world.objects(); ++k) {
+    const float* m = rows.data() + size_t(object[size_t(k)] - 1) * size_t(F) * 6;
+    const Pose34 p0 = world.object_pose(k, frame_time(0, F));
+    for (int b = 1; b < F; ++b) {
+      // The trajectory turns the object from frame 0 to frame b by the generator's turn: the
+      // angles agree without any frame transform (a change of frame keeps a turn's angle), and
+      // it carries the true centre of frame 0 to that of frame b. Rows are float32: 1e-3
+      // degrees and 1e-5 scene units allow their rounding (angles about 1 rad, positions about
+      // 3 units: 1e-7 relative) carried through the Euler matrices.
+      const Pose34 pb = world.object_pose(k, frame_time(b, F));
+      const Mat3 truth = bench::multiply(bench::rotation_of(pb), bench::transpose(bench::rotation_of(p0)));
+      const Mat34 ma = motion_matrix(m, F, frame_time(0, F)), mb = motion_matrix(m, F, frame_time(b, F));
+      const Mat34 carry = compose_rigid(invert_rigid(mb), ma);  // world at frame 0 -> world at frame b
+      BOOST_TEST(std::abs(angle_of(bench::rotation_of(carry)) - angle_of(truth)) < 1e-3, "object " << k << " frame " << b);
+      const Vec3 c0 = apply_rigid(loaded.point, {p0[3], p0[7], p0[11]});
+      const Vec3 cb = apply_rigid(loaded.point, {pb[3], pb[7], pb[11]});
+      const Vec3 moved = apply_rigid(carry, c0);
+      BOOST_TEST(std::hypot(moved[0] - cb[0], moved[1] - cb[1], moved[2] - cb[2]) < 1e-5, "object " << k << " frame " << b);
+    }
+  }
+  // Only family scenes know their motion, and only rigid objects take it: exit 2, one line,
+  // nothing written.
+  for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"--scenes synth:tiny:0 --exact-motion", "needs family:SEED scenes"},
+           {"--scenes family:1 --exact-motion --set object-motion=none", "needs 'object-motion rigid'"}}) {
+    const std::string bad = (dir / "b").string();
+    const Result e = bench_cli("--out " + bad + " " + args, dir);
+    BOOST_TEST(e.code == 2, args << ": " << e.err);
+    BOOST_TEST(e.err.find(needle) != std::string::npos, args << ": " << e.err);
+    BOOST_TEST(std::count(e.err.begin(), e.err.end(), '\n') == 1, e.err);
+    BOOST_TEST(!fs::exists(bad));
+  }
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -157,8 +157,14 @@ void Trainer::ensure_phase(bool joint) {
   // NeRF that pretraining made: at the joint phase's first step only (a resume loads the
   // trained motion instead).
   if (g->motion.valid() && step_ == config_.pretrain_steps) {
-    const MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e,
-                                               disparity_fit_ ? &*disparity_fit_ : nullptr);
+    MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e,
+                                       disparity_fit_ ? &*disparity_fit_ : nullptr);
+    if (motion_start_hook_) {
+      const size_t rows = start.rows.size(), boxes = start.boxes.size(), radii = start.radii.size();
+      motion_start_hook_(start);
+      if (start.rows.size() != rows || start.boxes.size() != boxes || start.radii.size() != radii)
+        throw Error("the motion start hook changed the start's sizes", kExitInternal);
+    }
     e->set(g->motion, start.rows);
     for (Tensor p : g->graph.parameters()) {
       if (p.info().name == kObjectBoxName) e->set(p, start.boxes);

@@ -16,6 +16,7 @@
 #include "nova/graph/distributed.hpp"
 #include "nova/model/occupancy_estimator.hpp"
 #include "nova/train/disparity_fit.hpp"
+#include "nova/train/motion_init.hpp"
 #include "nova/train/optim.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/runtime/runtime.hpp"
@@ -59,6 +60,10 @@ class Trainer {
   // Time every op (the runtime must be created with profiling on); profile_table() then
   // holds the joint (or, before it, the pretraining) graph's per-op times.
   void set_profile(bool on) { profile_ = on; }
+  // Rigid objects: called once with the start initial_motion finds (trajectories, boxes,
+  // radii) before the joint phase's first step, and may change it: a bench that starts from
+  // a known trajectory. Not called on a resume, which loads the trained motion.
+  void set_motion_start_hook(std::function<void(MotionStart&)> hook) { motion_start_hook_ = std::move(hook); }
   std::string profile_table() const { return exec_ ? exec_->profile_table() : std::string(); }
   // Forgets the timings so far (e.g. those of warm-up steps, which include kernel builds).
   void reset_profile() {
@@ -95,6 +100,7 @@ class Trainer {
   std::unique_ptr<Adam> adam_;
   bool graph_joint_ = false;
   bool profile_ = false;
+  std::function<void(MotionStart&)> motion_start_hook_;
   bool config_written_ = false;
   std::vector<std::vector<std::vector<uint32_t>>> regions_;  // per frame, cached
   std::vector<std::vector<float>> surfaces_;  // per frame with free_space_scene_fit (surface_map)
