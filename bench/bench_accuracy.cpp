@@ -6,10 +6,10 @@
 // only with nova_io (scenes, metrics, pictures).
 #include <chrono>
 #include <filesystem>
-#include <optional>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <unistd.h>
 

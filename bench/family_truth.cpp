@@ -92,6 +92,7 @@ std::vector<float> exact_motion_rows(const Scene& scene, const SynthWorld& world
     const Pose34 p0 = world.object_pose(k, frame_time(first, F));
     const Vec3 c0 = apply_rigid(loaded.point, {p0[3], p0[7], p0[11]});
     const Mat3 r0 = rotation_of(p0);
+    const Vec3 offset{origin[0] - c0[0], origin[1] - c0[1], origin[2] - c0[2]};  // the origin from the true centre
     Vec3 angles{r[first * 6], r[first * 6 + 1], r[first * 6 + 2]};
     for (int i = 0; i < F; ++i) {
       const Pose34 pi = world.object_pose(k, frame_time(i, F));
@@ -99,7 +100,6 @@ std::vector<float> exact_motion_rows(const Scene& scene, const SynthWorld& world
       const Mat3 turn = multiply(loaded.turn, multiply(multiply(rotation_of(pi), transpose(r0)), transpose(loaded.turn)));
       const Mat3 pose_turn = multiply(turn, start_turn);
       const Vec3 ci = apply_rigid(loaded.point, {pi[3], pi[7], pi[11]});
-      const Vec3 offset{origin[0] - c0[0], origin[1] - c0[1], origin[2] - c0[2]};
       Vec3 t{};
       for (int a = 0; a < 3; ++a) {
         t[a] = ci[a];
