@@ -189,7 +189,6 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
     if (exact_motion) {
       world.emplace(p.spec.preset, p.spec.seed);
       trainer.set_motion_start_hook([&](MotionStart& start) { start.rows = exact_motion_rows(scene, *world, start.rows); });
-      fs::create_directories(run_dir);
       write_atomically(run_dir + "/" + kExactMotionMarker, "started from the generator's exact motion (nova-bench accuracy --exact-motion)\n");
     }
     trainer.run([](const TrainProgress& pr) { std::cerr << "  " << progress_line(pr) << "\n"; });

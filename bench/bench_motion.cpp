@@ -29,10 +29,6 @@
 namespace nova::bench {
 namespace {
 
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
-
-double degrees(const Mat3& r) { return std::acos(std::clamp((r[0] + r[4] + r[8] - 1) / 2, -1.0, 1.0)) / kDegree; }
-
 Vec3 centroid_at_median_depth(const Frame& f, const ImageF& depth, const Image8& mask) {
   double cx = 0, cy = 0, n = 0;
   std::vector<float> z;
@@ -157,8 +153,8 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       const int a = seen[j - 1], b = seen[j];
       const Mat3 found = multiply(rotation_of(poses[j]), transpose(rotation_of(poses[j - 1])));
       const Mat3 truth = true_turn(k, a, b);
-      const double e = degrees(multiply(found, transpose(truth)));
-      s.true_turn += degrees(truth) / (b - a);
+      const double e = turn_degrees(multiply(found, transpose(truth)));
+      s.true_turn += turn_degrees(truth) / (b - a);
       s.mean_error += e;
       s.worst_error = std::max(s.worst_error, e);
       // P_b P_a^-1 carries frame a's point to frame b.
@@ -171,13 +167,13 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
     if (!trained.empty() && seen.size() > 1) {
       s.trained_error = s.trained_drift = s.trained_shift = 0;
       for (size_t j = 1; j < seen.size(); ++j) {
-        s.trained_error += degrees(multiply(trained_turn(trained, F, k, seen[j - 1], seen[j]), transpose(true_turn(k, seen[j - 1], seen[j]))));
+        s.trained_error += turn_degrees(multiply(trained_turn(trained, F, k, seen[j - 1], seen[j]), transpose(true_turn(k, seen[j - 1], seen[j]))));
         s.trained_shift += distance(trained_carry(trained, F, k, seen[j - 1], seen[j], true_centre(k, seen[j - 1])),
                                     true_centre(k, seen[j])) / radius;
       }
       s.trained_error /= double(seen.size() - 1);
       s.trained_shift /= double(seen.size() - 1);
-      s.trained_drift = degrees(multiply(trained_turn(trained, F, k, seen.front(), seen.back()),
+      s.trained_drift = turn_degrees(multiply(trained_turn(trained, F, k, seen.front(), seen.back()),
                                          transpose(true_turn(k, seen.front(), seen.back()))));
     }
     if (s.pairs > 0) {
@@ -185,8 +181,8 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       s.mean_error /= s.pairs;
       s.shift /= s.pairs;
       const Mat3 whole = true_turn(k, seen.front(), seen.back());
-      s.drift = degrees(multiply(chain, transpose(whole)));
-      s.chained_truth = degrees(whole);
+      s.drift = turn_degrees(multiply(chain, transpose(whole)));
+      s.chained_truth = turn_degrees(whole);
     }
     out.push_back(s);
   }

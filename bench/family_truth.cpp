@@ -25,6 +25,10 @@ Mat3 transpose(const Mat3& a) {
 
 Mat3 rotation_of(const std::array<double, 12>& p) { return {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]}; }
 
+double turn_degrees(const Mat3& r) {
+  return std::acos(std::clamp((r[0] + r[4] + r[8] - 1) / 2, -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+}
+
 std::vector<int> match_objects(const Scene& scene, const SynthWorld& world) {
   const int F = int(scene.frames.size()), K = int(scene.frames[0].masks.size()) - 1;
   std::vector<std::vector<long>> shared(size_t(world.objects()) + 1, std::vector<long>(size_t(K) + 1, 0));

@@ -14,6 +14,7 @@ namespace nova::bench {
 Mat3 multiply(const Mat3& a, const Mat3& b);
 Mat3 transpose(const Mat3& a);
 Mat3 rotation_of(const std::array<double, 12>& pose);  // the rotation of a row-major [R | t]
+double turn_degrees(const Mat3& r);                    // the angle a rotation turns by
 
 // Which of the scene's objects follows each true object (index k = 1..objects): the one
 // sharing the most pixels with it over the video (the scene's own numbering where its masks

@@ -305,9 +305,6 @@ BOOST_AUTO_TEST_CASE(bad_inputs_exit_2_and_write_nothing) {
   BOOST_TEST(!fs::exists(out));
 }
 
-// The angle of a rotation, degrees.
-double angle_of(const Mat3& r) { return std::acos(std::clamp((r[0] + r[4] + r[8] - 1) / 2, -1.0, 1.0)) * 180.0 / M_PI; }
-
 BOOST_AUTO_TEST_CASE(exact_motion_starts_from_the_generators_motion) {
   if (!has_bench()) return;
   TempDir dir("accuracy-exact");
@@ -337,7 +334,7 @@ BOOST_AUTO_TEST_CASE(exact_motion_starts_from_the_generators_motion) {
       const Mat3 truth = bench::multiply(bench::rotation_of(pb), bench::transpose(bench::rotation_of(p0)));
       const Mat34 ma = motion_matrix(m, F, frame_time(0, F)), mb = motion_matrix(m, F, frame_time(b, F));
       const Mat34 carry = compose_rigid(invert_rigid(mb), ma);  // world at frame 0 -> world at frame b
-      BOOST_TEST(std::abs(angle_of(bench::rotation_of(carry)) - angle_of(truth)) < 1e-3, "object " << k << " frame " << b);
+      BOOST_TEST(std::abs(bench::turn_degrees(bench::rotation_of(carry)) - bench::turn_degrees(truth)) < 1e-3, "object " << k << " frame " << b);
       const Vec3 c0 = apply_rigid(loaded.point, {p0[3], p0[7], p0[11]});
       const Vec3 cb = apply_rigid(loaded.point, {pb[3], pb[7], pb[11]});
       const Vec3 moved = apply_rigid(carry, c0);
