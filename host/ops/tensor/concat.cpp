@@ -47,7 +47,10 @@ class ConcatOp final : public Op {
     if (!dy || rows == 0) return;
     size_t offset = 0;
     for (size_t i = 0; i < widths_.size(); i += 2) {
-      if (i + 1 < widths_.size()) {
+      // Two parts that are one tensor (concat(x, x)) share a gradient: one launch would write
+      // and add the same elements from two work-items, a race a GPU loses (PoCL's CPU order
+      // hides it); such a pair goes through two launches in order.
+      if (i + 1 < widths_.size() && !(ctx.grad_in(i) && ctx.grad_in(i) == ctx.grad_in(i + 1))) {
         cl_mem d0 = ctx.grad_in(i), d1 = ctx.grad_in(i + 1);
         const unsigned wanted = (d0 ? 1u : 0u) | (d1 ? 2u : 0u) | (d0 && ctx.accumulate_in(i) ? 4u : 0u) |
                                 (d1 && ctx.accumulate_in(i + 1) ? 8u : 0u);
@@ -60,13 +63,16 @@ class ConcatOp final : public Op {
         offset += widths_[i] + widths_[i + 1];
         continue;
       }
-      if (cl_mem dx = ctx.grad_in(i))
-        ctx.launch("tensor", "copy_cols_back")
-            .arg(dy).arg(dx).arg(detail::u32(rows, "rows"))
-            .arg(detail::u32(widths_[i], "cols")).arg(detail::u32(total_, "cols"))
-            .arg(detail::u32(offset, "offset")).arg(static_cast<int>(ctx.accumulate_in(i)))
-            .run2(widths_[i], rows);
-      offset += widths_[i];
+      const size_t last = i + 1 < widths_.size() ? i + 1 : i;  // a shared pair, or a last odd part
+      for (size_t j = i; j <= last; ++j) {
+        if (cl_mem dx = ctx.grad_in(j))
+          ctx.launch("tensor", "copy_cols_back")
+              .arg(dy).arg(dx).arg(detail::u32(rows, "rows"))
+              .arg(detail::u32(widths_[j], "cols")).arg(detail::u32(total_, "cols"))
+              .arg(detail::u32(offset, "offset")).arg(static_cast<int>(ctx.accumulate_in(j)))
+              .run2(widths_[j], rows);
+        offset += widths_[j];
+      }
     }
   }
 
