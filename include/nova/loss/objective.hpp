@@ -133,8 +133,9 @@ Objective pretrain_objective(const RenderedRays& r, Tensor target_rgb, const Pri
 // Joint training: novel_view_loss, then the depth prior (with usable disparity), the
 // distortion of each object NeRF on its mask's rays, the free-space prior (with usable
 // disparity) and, for rigid objects (`motion` valid, `frames` per trajectory), the motion's
-// smoothness. On the static NeRF the distortion cost 2 dB of camera-0 PSNR on the default
-// synthetic scene (docs/accuracy.md), so it is not applied there.
+// smoothness. The distortion is not applied to the static NeRF: there it was tried at
+// 0.01-0.1 on the default synthetic scene and not kept (docs/accuracy-studies.md, "Tried and
+// not kept").
 Objective joint_objective(const RenderedRays& r, const NovelViewTargets& targets, const NovelViewLossWeights& weights,
                           const RenderOptions& options, const LossConventions& conventions,
                           const PriorWeights& priors, DisparityTargets* disparity, Tensor motion, int frames,
