@@ -78,4 +78,61 @@ BOOST_AUTO_TEST_CASE(regions_share_the_rays) {
   BOOST_TEST(draw_pixels(rgb, empty, pixel_regions(empty), 10, again).region_rays == std::vector<int>({10, 0, 0}));
 }
 
+// The ring against a brute-force reading: background pixels whose square of half-width
+// `reach` holds an object pixel.
+BOOST_AUTO_TEST_CASE(rim_is_the_background_next_to_the_objects) {
+  const std::vector<Image8> m = masks();
+  const auto regions = pixel_regions(m);
+  for (int reach : {0, 1, 2, 5}) {
+    std::set<uint32_t> want;
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        if (owner(m, x, y) != 0) continue;
+        bool hit = false;
+        for (int dy = -reach; dy <= reach; ++dy)
+          for (int dx = -reach; dx <= reach; ++dx) {
+            const int xx = x + dx, yy = y + dy;
+            if (xx >= 0 && xx < kW && yy >= 0 && yy < kH && owner(m, xx, yy) != 0) hit = true;
+          }
+        if (hit) want.insert(static_cast<uint32_t>(y * kW + x));
+      }
+    const std::vector<uint32_t> rim = rim_pixels(regions, kW, kH, reach);
+    BOOST_TEST(std::set<uint32_t>(rim.begin(), rim.end()) == want, "reach " << reach);
+    BOOST_TEST(rim.size() == want.size(), "reach " << reach << ": no pixel twice");
+  }
+  // The block's ring at reach 1 is 6 x 5 - 4 x 3 = 18 pixels, the edge pixel's 2 x 3 - 1 = 5.
+  BOOST_TEST(rim_pixels(regions, kW, kH, 1).size() == 23u);
+}
+
+// With RimRays the background's first share of rays lies in the ring, the rest anywhere in
+// the background; the objects' rays are drawn as before; no objects, no ring.
+BOOST_AUTO_TEST_CASE(rim_rays_come_from_the_ring) {
+  const std::vector<Image8> m = masks();
+  const Image8 rgb = picture();
+  const auto regions = pixel_regions(m);
+  const std::vector<uint32_t> rim = rim_pixels(regions, kW, kH, 2);
+  const std::set<uint32_t> ring(rim.begin(), rim.end());
+  std::mt19937 rng(7);
+  const PixelBatch b = draw_pixels(rgb, m, regions, 101, rng, RimRays{0.4f, 2});
+  BOOST_TEST(b.region_rays == std::vector<int>({35, 33, 33}));
+  int in_ring = 0, beyond = 0;
+  for (int ray = 0; ray < 101; ++ray) {
+    const int x = static_cast<int>(b.pixels[ray * 2]), y = static_cast<int>(b.pixels[ray * 2 + 1]);
+    const int region = ray < 35 ? 0 : ray < 68 ? 1 : 2;
+    BOOST_TEST(owner(m, x, y) == region, "ray " << ray);
+    const bool near = ring.count(static_cast<uint32_t>(y * kW + x)) > 0;
+    if (ray < 14) BOOST_TEST(near, "ray " << ray << " is one of the ring's 14 (0.4 of 35)");
+    if (ray >= 14 && ray < 35) (near ? in_ring : beyond) += 1;
+    for (size_t o = 0; o < m.size(); ++o) BOOST_TEST(b.masks[o * 101 + ray] == m[o].at(x, y) / 255.0f);
+  }
+  // The ring is 58 of the background's 378 pixels: the other 21 rays fall mostly beyond it.
+  BOOST_TEST(beyond > in_ring);
+  std::vector<Image8> empty(3, Image8(kW, kH, 1, 0));
+  empty[0] = Image8(kW, kH, 1, 255);
+  std::mt19937 a(7), c(7);
+  const PixelBatch plain = draw_pixels(rgb, empty, pixel_regions(empty), 10, a);
+  const PixelBatch ringed = draw_pixels(rgb, empty, pixel_regions(empty), 10, c, RimRays{0.5f, 2});
+  BOOST_TEST(plain.pixels == ringed.pixels);
+}
+
 BOOST_AUTO_TEST_SUITE_END()

@@ -1,5 +1,8 @@
 #include "nova/train/pixel_batch.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
 #include <sstream>
 
 #include "nova/runtime/error.hpp"
@@ -27,8 +30,39 @@ std::vector<std::vector<uint32_t>> pixel_regions(const std::vector<Image8>& mask
   return regions;
 }
 
+std::vector<uint32_t> rim_pixels(const std::vector<std::vector<uint32_t>>& regions, int width, int height,
+                                 int reach) {
+  const size_t W = static_cast<size_t>(width), H = static_cast<size_t>(height);
+  std::vector<uint8_t> near(W * H, 0), rows(W * H, 0);
+  for (size_t k = 1; k < regions.size(); ++k)
+    for (uint32_t p : regions[k]) near[p] = 1;
+  // A square window's maximum, separably: along each row, then along each column.
+  const ptrdiff_t r = std::max(reach, 0);
+  for (size_t y = 0; y < H; ++y)
+    for (size_t x = 0; x < W; ++x) {
+      uint8_t m = 0;
+      for (ptrdiff_t d = -r; d <= r && !m; ++d) {
+        const ptrdiff_t xx = static_cast<ptrdiff_t>(x) + d;
+        if (xx >= 0 && xx < static_cast<ptrdiff_t>(W)) m = near[y * W + static_cast<size_t>(xx)];
+      }
+      rows[y * W + x] = m;
+    }
+  std::vector<uint32_t> rim;
+  for (uint32_t p : regions[0]) {
+    const ptrdiff_t x = p % W, y = p / W;
+    bool hit = false;
+    for (ptrdiff_t d = -r; d <= r && !hit; ++d) {
+      const ptrdiff_t yy = y + d;
+      if (yy >= 0 && yy < static_cast<ptrdiff_t>(H)) hit = rows[static_cast<size_t>(yy) * W + static_cast<size_t>(x)] != 0;
+    }
+    if (hit) rim.push_back(p);
+  }
+  return rim;
+}
+
 PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
-                       const std::vector<std::vector<uint32_t>>& regions, int rays, std::mt19937& rng) {
+                       const std::vector<std::vector<uint32_t>>& regions, int rays, std::mt19937& rng,
+                       const RimRays& rim_rays) {
   std::vector<size_t> present;
   for (size_t k = 0; k < regions.size(); ++k)
     if (!regions[k].empty()) present.push_back(k);
@@ -43,10 +77,18 @@ PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
   b.pixels.resize(R * 2);
   b.rgb.resize(R * 3);
   b.masks.resize(N * R);
+  // The background's rays drawn from the ring about the objects: the first `from_rim` of them.
+  std::vector<uint32_t> rim;
+  int from_rim = 0;
+  const bool objects = std::any_of(regions.begin() + 1, regions.end(), [](const auto& r) { return !r.empty(); });
+  if (rim_rays.share > 0.0f && objects && !regions[0].empty()) {
+    rim = rim_pixels(regions, rgb.width, rgb.height, rim_rays.reach);
+    if (!rim.empty()) from_rim = static_cast<int>(std::lround(rim_rays.share * static_cast<float>(b.region_rays[0])));
+  }
   size_t r = 0;
   for (size_t k = 0; k < regions.size(); ++k)
     for (int n = 0; n < b.region_rays[k]; ++n, ++r) {
-      const auto& region = regions[k];
+      const auto& region = k == 0 && n < from_rim ? rim : regions[k];
       const uint32_t p = region[static_cast<size_t>(uniform01(rng) * static_cast<float>(region.size())) % region.size()];
       const int x = static_cast<int>(p % static_cast<uint32_t>(rgb.width));
       const int y = static_cast<int>(p / static_cast<uint32_t>(rgb.width));

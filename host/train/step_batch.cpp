@@ -1,6 +1,7 @@
 #include "train/step_batch.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 
 #include "nova/sampling/camera.hpp"
@@ -23,6 +24,11 @@ StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std:
                          (phase_step - c.augment_start) % c.augment_every == 0;
   PixelBatch batch;
   std::vector<Camera> cameras(static_cast<size_t>(nerfs), frame.camera);
+  RimRays rim;
+  if (joint) {
+    rim.share = c.rim_rays;
+    rim.reach = std::max(1, static_cast<int>(std::lround(c.rim_width * static_cast<float>(frame.rgb.width))));
+  }
   // The image each NeRF's own target colour comes from (the per-NeRF RGB loss under the
   // reference conventions): the frame, or on an augmented step each object's warped view.
   std::vector<Image8> nerf_images;
@@ -41,14 +47,14 @@ StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std:
     size_t usable = 0;
     for (const auto& r : warped) usable += r.size();
     if (usable < static_cast<size_t>(c.rays) / 4) continue;
-    batch = draw_pixels(af.rgb, af.masks, warped, c.rays, rng);
+    batch = draw_pixels(af.rgb, af.masks, warped, c.rays, rng, rim);
     cameras = af.cameras;
     if (want_nerf_images) nerf_images = std::move(af.images);
     drawn = true;
   }
   if (!drawn && joint) {
     augmented = false;
-    batch = draw_pixels(frame.rgb, frame.masks, regions[fi], c.rays, rng);
+    batch = draw_pixels(frame.rgb, frame.masks, regions[fi], c.rays, rng, rim);
   } else if (!drawn) {
     const auto& r = regions[fi];
     std::vector<std::vector<uint32_t>> background_only(r.size());

@@ -251,6 +251,11 @@ std::vector<ConfigOption> make_options() {
   o.push_back(int_option("object-samples", "object-motion rigid, forward-facing scenes: of each ray's samples, how many crowd into the depths within two radii of where each object stands at the view's time, shared evenly by the objects (0: every sample evenly spread; metric scenes always spread them; object-motion none turns it off)", 0, 1023,
                          [](TrainConfig& c) -> int& { return c.object_samples; }));
   o.back().before = "0";
+  o.push_back(float_option("rim-rays", "joint steps: of the background's rays, the share drawn from the ring of background pixels within rim-width of an object's mask, where an object's density spread past its silhouette shows (0: spread evenly over the background)", 0.0, 0.95,
+                           [](TrainConfig& c) -> float& { return c.rim_rays; }));
+  o.back().before = "0";
+  o.push_back(float_option("rim-width", "rim-rays: the ring's width as a fraction of the image width (at least one pixel)", 0.0, 0.5,
+                           [](TrainConfig& c) -> float& { return c.rim_width; }));
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
   o.push_back(int_option("canonical-coarse-to-fine", "object-motion rigid, hash grid (unused with the frequency encoding): joint steps over which the canonical grid's levels open from coarse to fine, so the motion aligns coarse shapes first (0: every level from the start)", 0, kBig,

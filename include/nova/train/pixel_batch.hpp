@@ -26,12 +26,27 @@ struct PixelBatch {
 std::vector<std::vector<uint32_t>> pixel_regions(const std::vector<Image8>& masks,
                                                  const Image8* valid = nullptr);
 
+// The background pixels (regions[0]) within `reach` pixels (along rows and columns, a square
+// about each pixel) of an object's pixel (regions[1..]): the ring just outside the objects'
+// silhouettes, in regions[0]'s order.
+std::vector<uint32_t> rim_pixels(const std::vector<std::vector<uint32_t>>& regions, int width, int height,
+                                 int reach);
+
+// Where the background's rays come from. Spread evenly over a frame, they rarely fall just
+// outside a small object, where an object NeRF's density spread past its silhouette shows
+// as a haze: `share` of them are drawn from the ring rim_pixels(regions, ..., reach) instead
+// (when the frame has an object pixel and the ring a pixel).
+struct RimRays {
+  float share = 0.0f;
+  int reach = 0;
+};
+
 // `rays` pixels: an equal share for each non-empty region (the remainder to the first
 // non-empty one), uniform with replacement inside it, so that small objects get as many
 // rays as the background. `regions` from pixel_regions on the same masks.
 PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
                        const std::vector<std::vector<uint32_t>>& regions, int rays,
-                       std::mt19937& rng);
+                       std::mt19937& rng, const RimRays& rim = {});
 
 // The generator's full state as text, and back (Error on malformed text).
 std::string rng_state(const std::mt19937& rng);

@@ -32,6 +32,10 @@ struct TrainConfig : ModelConfig {
   int augment_every = 3;         // every n-th joint step is augmented
   int augment_start = 0;         // joint steps before the first augmented one (warm-up)
   float augment_degrees = 20.0f;
+  // Joint steps: of the background's rays, this share comes from the ring of background pixels
+  // within rim_width (a fraction of the image width) of an object's mask (pixel_batch.hpp).
+  float rim_rays = 0.0f;
+  float rim_width = 0.03f;
   NovelViewLossWeights weights;
   // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
   // public reference code's (reference); docs/training.md, "Loss conventions".
