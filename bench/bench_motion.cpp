@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include "bench.hpp"
@@ -192,12 +193,15 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"made-masks", "off"}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"depth-reach", "0"}, {"consistency", "0"}, {"made-masks", "off"}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
                  "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
                  "trajectories of DIR/family-S (nova-bench accuracy's OUT/runs); --window N: earlier frames each frame "
-                 "is aligned to at once; --edge PX: pixels of each mask's rim left out; --made-masks: track the objects "
+                 "is aligned to at once; --edge PX: pixels of each mask's rim left out; --depth-reach PX: each mask pixel's "
+                 "depth the nearest of the mask's within PX pixels at 160 px width (nova train --align-depth-reach; "
+                 "default 0: as given); --consistency R: a frame pair whose turn the way back does not undo within R of it takes no turn "
+                 "(nova train --align-consistency; default 0: no check); --made-masks: track the objects "
                  "in the masks nova masks makes instead of the given ones (each true object by the made one that "
                  "shares the most pixels with it)\n";
     return 0;
@@ -208,6 +212,17 @@ int motion(const Args& args) {
   if (options.window < 1) throw Error("option 'window' must be at least 1, not " + o.str("window"));
   options.edge_px = static_cast<int>(o.integer("edge"));
   if (options.edge_px < 1) throw Error("option 'edge' must be at least 1, not " + o.str("edge"));
+  // A number in [0, high].
+  const auto number = [&](const char* key, double high, double& value) {
+    const std::string v = o.str(key);
+    char* end = nullptr;
+    value = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end || !(value >= 0) || value > high)
+      throw Error(std::string("option '") + key + "' must be a number in [0, " + std::to_string(static_cast<int>(high)) +
+                  "], not '" + v + "'");
+  };
+  number("depth-reach", 64, options.depth_reach_px);
+  number("consistency", 100, options.consistency);
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");

@@ -2,7 +2,9 @@
 // the Euler angles' round trip and continuity.
 #include <boost/test/unit_test.hpp>
 #include <atomic>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -165,20 +167,63 @@ struct Video {
 }  // namespace
 
 // With one view back, tracking is the frame pairs' alignments chained: the same poses, bit
-// for bit.
+// for bit, with the depths as given and no check of the turns; with the turns checked, the
+// default scene's textured sphere and box pass every check, and the poses stay the same.
 BOOST_AUTO_TEST_CASE(tracking_one_view_back_chains_the_pairs) {
   const Video video(0, 4);
-  const std::vector<ObjectView> views = video.views(1);
-  const std::vector<Vec3> anchors = video.anchors(1);
-  const std::vector<Mat34> poses = track_object(views, anchors);
-  BOOST_TEST_REQUIRE(poses.size() == views.size());
-  Mat34 pose{1, 0, 0, anchors[0][0], 0, 1, 0, anchors[0][1], 0, 0, 1, anchors[0][2]};
-  for (size_t j = 0; j < views.size(); ++j) {
-    if (j > 0) {
-      const Vec3 shift{anchors[j][0] - anchors[j - 1][0], anchors[j][1] - anchors[j - 1][1], anchors[j][2] - anchors[j - 1][2]};
-      pose = compose_rigid(align_object(views[j - 1], views[j], shift).motion, pose);
+  for (int k = 1; k <= video.world.objects(); ++k) {
+    const std::vector<ObjectView> views = video.views(k);
+    const std::vector<Vec3> anchors = video.anchors(k);
+    AlignmentOptions plain;
+    plain.depth_reach_px = 0;
+    plain.consistency = 0;
+    AlignmentOptions checked = plain;
+    checked.consistency = 1.0;
+    const std::vector<Mat34> poses = track_object(views, anchors, plain), checked_poses = track_object(views, anchors, checked);
+    BOOST_TEST_REQUIRE(poses.size() == views.size());
+    Mat34 pose{1, 0, 0, anchors[0][0], 0, 1, 0, anchors[0][1], 0, 0, 1, anchors[0][2]};
+    for (size_t j = 0; j < views.size(); ++j) {
+      if (j > 0) {
+        const Vec3 shift{anchors[j][0] - anchors[j - 1][0], anchors[j][1] - anchors[j - 1][1], anchors[j][2] - anchors[j - 1][2]};
+        pose = compose_rigid(align_object(views[j - 1], views[j], shift, plain).motion, pose);
+      }
+      for (size_t e = 0; e < 12; ++e) {
+        BOOST_TEST(poses[j][e] == pose[e]);
+        BOOST_TEST(checked_poses[j][e] == pose[e], "object " << k << ", view " << j << ": a pair failed the turn check");
+      }
     }
-    for (size_t e = 0; e < 12; ++e) BOOST_TEST(poses[j][e] == pose[e]);
+  }
+}
+
+// turns_agree: a turn and its inverse agree; a turn found the same way in both directions
+// (what a symmetric object can give) does not, unless both are within the floor.
+BOOST_AUTO_TEST_CASE(turns_agree_when_the_way_back_undoes_the_turn) {
+  const auto turn_y = [](double degrees) {
+    const double a = degrees * kDegree;
+    return Mat34{std::cos(a), 0, std::sin(a), 0.1, 0, 1, 0, -0.2, -std::sin(a), 0, std::cos(a), 0.3};
+  };
+  AlignmentOptions o;
+  o.consistency = 1.0;  // and the floor's 3 degrees
+  BOOST_TEST(turns_agree(turn_y(30), invert_rigid(turn_y(30)), o));
+  BOOST_TEST(turns_agree(turn_y(30), turn_y(-20), o));   // 10 degrees left over of 30
+  BOOST_TEST(!turns_agree(turn_y(30), turn_y(15), o));   // 45 left over
+  BOOST_TEST(!turns_agree(turn_y(2), turn_y(2), o));     // 4 left over: above the floor and the turn
+  BOOST_TEST(turns_agree(turn_y(1), turn_y(1), o));      // 2 left over: within the floor
+  o.consistency = 0.2;
+  BOOST_TEST(!turns_agree(turn_y(30), turn_y(-20), o));  // 10 > 0.2 x 30
+
+  // A check no pair passes (no gap allowed): every pair takes the anchors' shift alone, so
+  // each pose is its anchor, unturned.
+  const Video video(0, 3);
+  AlignmentOptions strict;
+  strict.consistency = 1e-12;
+  strict.consistency_floor_deg = 0;
+  const std::vector<Vec3> anchors = video.anchors(1);
+  const std::vector<Mat34> poses = track_object(video.views(1), anchors, strict);
+  BOOST_TEST_REQUIRE(poses.size() == anchors.size());
+  for (size_t j = 0; j < poses.size(); ++j) {
+    const Mat34 want{1, 0, 0, anchors[j][0], 0, 1, 0, anchors[j][1], 0, 0, 1, anchors[j][2]};
+    for (size_t e = 0; e < 12; ++e) BOOST_TEST(std::fabs(poses[j][e] - want[e]) < 1e-12, "view " << j << " element " << e);
   }
 }
 
@@ -253,6 +298,45 @@ BOOST_AUTO_TEST_CASE(euler_angles_round_trip_and_stay_near) {
 // The host's parallel loop behind the tracks and the disparity fit: every index runs once
 // (more indices than threads, and none), and an exception thrown by one index reaches the
 // caller after every thread has stopped.
+// nearest_depth_within against a brute-force reading: mask pixels take the smallest valid depth
+// of the mask in their square, everything else keeps its depth.
+BOOST_AUTO_TEST_CASE(nearest_depth_reads_the_masks_square) {
+  const int W = 19, H = 13;
+  ImageF depth{W, H, std::vector<float>(W * H)};
+  Image8 mask(W, H, 1, 0);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      depth.data[static_cast<size_t>(y * W + x)] = 1.0f + 0.37f * static_cast<float>((x * 7 + y * 5) % 11);
+      if ((x - 9) * (x - 9) + 2 * (y - 6) * (y - 6) < 40) mask.at(x, y) = 255;
+    }
+  depth.data[6 * W + 9] = -1.0f;                                      // invalid inside the mask
+  depth.data[6 * W + 10] = std::numeric_limits<float>::quiet_NaN();  // likewise
+  depth.data[0] = 0.01f;                                              // nearest of all, outside the mask
+  for (int reach : {0, 1, 2, 4}) {
+    const ImageF got = nearest_depth_within(depth, mask, reach);
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const float own = depth.data[static_cast<size_t>(y * W + x)];
+        float want = own;
+        if (mask.at(x, y) >= 128) {
+          float best = std::numeric_limits<float>::infinity();
+          for (int yy = std::max(0, y - reach); yy <= std::min(H - 1, y + reach); ++yy)
+            for (int xx = std::max(0, x - reach); xx <= std::min(W - 1, x + reach); ++xx) {
+              const float z = depth.data[static_cast<size_t>(yy * W + xx)];
+              if (mask.at(xx, yy) >= 128 && z > 0 && std::isfinite(z)) best = std::min(best, z);
+            }
+          if (std::isfinite(best)) want = best;
+        }
+        const float g = got.data[static_cast<size_t>(y * W + x)];
+        BOOST_TEST((g == want || (std::isnan(g) && std::isnan(want))), "reach " << reach << " at " << x << "," << y << ": " << g << " want " << want);
+      }
+  }
+  // Reach 0 leaves every valid depth as it is; the invalid ones stay invalid.
+  const ImageF same = nearest_depth_within(depth, mask, 0);
+  BOOST_TEST(same.data[6 * W + 9] == -1.0f);
+  BOOST_TEST(same.data[0] == 0.01f);
+}
+
 BOOST_AUTO_TEST_CASE(parallel_for_runs_every_index_once_and_rethrows) {
   for (size_t n : {size_t{0}, size_t{1}, size_t{7}, size_t{1000}}) {
     std::vector<std::atomic<int>> runs(n);

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <limits>
 
 #include "nova/runtime/error.hpp"
 #include "train/float_plane.hpp"
@@ -276,11 +278,76 @@ ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec
   return align_object(std::vector<PlacedView>{{a, kIdentity}}, b, translation, options);
 }
 
-std::vector<Mat34> track_object(const std::vector<ObjectView>& views, const std::vector<Vec3>& anchors,
+ImageF nearest_depth_within(const ImageF& depth, const Image8& mask, int reach) {
+  const size_t W = static_cast<size_t>(depth.width), H = static_cast<size_t>(depth.height);
+  if (mask.width != depth.width || mask.height != depth.height)
+    throw Error("nearest_depth_within: mask and depth differ in size", kExitInternal);
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> v(W * H, inf), rows(W * H, inf);
+  for (size_t y = 0; y < H; ++y)
+    for (size_t x = 0; x < W; ++x) {
+      const float z = depth.data[y * W + x];
+      if (mask.at(static_cast<int>(x), static_cast<int>(y)) >= 128 && z > 0 && std::isfinite(z)) v[y * W + x] = z;
+    }
+  // A square window's minimum, separably: along each row, then along each column.
+  const ptrdiff_t r = std::max(reach, 0), w = static_cast<ptrdiff_t>(W), h = static_cast<ptrdiff_t>(H);
+  for (ptrdiff_t y = 0; y < h; ++y)
+    for (ptrdiff_t x = 0; x < w; ++x) {
+      float m = inf;
+      for (ptrdiff_t xx = std::max<ptrdiff_t>(0, x - r); xx <= std::min(w - 1, x + r); ++xx) m = std::min(m, v[static_cast<size_t>(y * w + xx)]);
+      rows[static_cast<size_t>(y * w + x)] = m;
+    }
+  ImageF out = depth;
+  for (ptrdiff_t y = 0; y < h; ++y)
+    for (ptrdiff_t x = 0; x < w; ++x) {
+      if (mask.at(static_cast<int>(x), static_cast<int>(y)) < 128) continue;
+      float m = inf;
+      for (ptrdiff_t yy = std::max<ptrdiff_t>(0, y - r); yy <= std::min(h - 1, y + r); ++yy) m = std::min(m, rows[static_cast<size_t>(yy * w + x)]);
+      if (m < inf) out.data[static_cast<size_t>(y * w + x)] = m;
+    }
+  return out;
+}
+
+namespace {
+
+// The rotation angle of a rigid map's rotation (radians).
+double turn_of(const Mat34& m) { return std::acos(std::clamp((m[0] + m[5] + m[10] - 1) / 2, -1.0, 1.0)); }
+
+// View a's object aligned to view b where b aligned back to a agrees (turns_agree), else the
+// anchors' shift alone.
+Mat34 consistent_step(const ObjectView& a, const ObjectView& b, const Vec3& shift, const AlignmentOptions& o) {
+  const Mat34 forward = align_object(a, b, shift, o).motion;
+  if (!(o.consistency > 0)) return forward;
+  const Mat34 backward = align_object(b, a, Vec3{-shift[0], -shift[1], -shift[2]}, o).motion;
+  if (turns_agree(forward, backward, o)) return forward;
+  Mat34 m = kIdentity;
+  for (size_t d = 0; d < 3; ++d) m[d * 4 + 3] = shift[d];
+  return m;
+}
+
+}  // namespace
+
+bool turns_agree(const Mat34& forward, const Mat34& backward, const AlignmentOptions& options) {
+  constexpr double kDegree = 3.14159265358979323846 / 180.0;
+  const double gap = turn_of(compose_rigid(backward, forward));
+  return gap <= std::max(options.consistency * turn_of(forward), options.consistency_floor_deg * kDegree);
+}
+
+std::vector<Mat34> track_object(const std::vector<ObjectView>& given, const std::vector<Vec3>& anchors,
                                 const AlignmentOptions& options) {
-  if (anchors.size() != views.size()) throw Error("track_object: " + std::to_string(views.size()) + " views but " +
+  if (anchors.size() != given.size()) throw Error("track_object: " + std::to_string(given.size()) + " views but " +
                                                   std::to_string(anchors.size()) + " anchors", kExitInternal);
-  if (views.empty()) return {};
+  if (given.empty()) return {};
+  std::vector<ObjectView> views = given;
+  std::vector<ImageF> nearest;  // the views' depths, nearest within depth_reach_px
+  if (options.depth_reach_px > 0) {
+    nearest.resize(given.size());
+    detail::parallel_for(given.size(), [&](size_t i) {
+      const int reach = static_cast<int>(std::lround(options.depth_reach_px * given[i].rgb->width / 160.0));
+      nearest[i] = nearest_depth_within(*given[i].depth, *given[i].mask, reach);
+    });
+    for (size_t i = 0; i < views.size(); ++i) views[i].depth = &nearest[i];
+  }
   // The anchors' move from view j - 1 to view j: each alignment's starting translation.
   const auto shift = [&](size_t j) {
     Vec3 s{};
@@ -295,7 +362,7 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& views, const std:
     // poses, so they run at once and the poses are chained after.
     std::vector<Mat34> step(views.size(), kIdentity);
     detail::parallel_for(views.size() - 1, [&](size_t p) {
-      step[p + 1] = align_object(views[p], views[p + 1], shift(p + 1), options).motion;
+      step[p + 1] = consistent_step(views[p], views[p + 1], shift(p + 1), options);
     });
     for (size_t j = 1; j < views.size(); ++j) poses.push_back(compose_rigid(step[j], poses[j - 1]));
     return poses;

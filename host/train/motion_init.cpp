@@ -212,7 +212,8 @@ std::vector<MotionRow> fill_motion_rows(const std::vector<int>& known, const std
 }
 
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
-                           int samples, Executor& trained, const DisparityFit* known_fit) {
+                           int samples, Executor& trained, const DisparityFit* known_fit,
+                           const AlignmentOptions& align) {
   const int K = geo.num_objects, F = motion_options(geo).frames;
   if (K < 1) throw Error("initial_motion: the scene has no objects", kExitInternal);
   const DisparityFit fit = !geo.disparity ? DisparityFit{} : known_fit ? *known_fit : fit_disparity(scene);
@@ -322,7 +323,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
         views.push_back({&frame.camera, &frame.rgb, &frame.masks.at(static_cast<size_t>(k)), &depth[f]});
         anchors.push_back(*anchor[static_cast<size_t>(i)]);
       }
-      poses = track_object(views, anchors);
+      poses = track_object(views, anchors, align);
     } else {
       for (int i : known) {
         Mat34 pose{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};

@@ -256,6 +256,12 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "0";
   o.push_back(float_option("rim-width", "rim-rays: the ring's width as a fraction of the image width (at least one pixel)", 0.0, 0.5,
                            [](TrainConfig& c) -> float& { return c.rim_width; }));
+  o.push_back(float_option("align-depth-reach", "object-motion rigid: before the frames' alignment each mask pixel's depth becomes the nearest of the mask's within this many pixels (at 160 px width, scaled with the image), undoing a disparity blurred over the object's rim (0: as given)", 0.0, 64.0,
+                           [](TrainConfig& c) -> float& { return c.align_depth_reach; }));
+  o.back().before = "0";
+  o.push_back(float_option("align-consistency", "object-motion rigid: each frame pair is also aligned back; a pair whose way back leaves more turn than this fraction of the turn found (and more than 3 degrees) takes no turn, as a symmetric object can give each direction a wrong turn of its own (0: no check)", 0.0, 100.0,
+                           [](TrainConfig& c) -> float& { return c.align_consistency; }));
+  o.back().before = "0";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
                            [](TrainConfig& c) -> float& { return c.w_motion_smooth; }));
   o.push_back(int_option("canonical-coarse-to-fine", "object-motion rigid, hash grid (unused with the frequency encoding): joint steps over which the canonical grid's levels open from coarse to fine, so the motion aligns coarse shapes first (0: every level from the start)", 0, kBig,

@@ -157,8 +157,11 @@ void Trainer::ensure_phase(bool joint) {
   // NeRF that pretraining made: at the joint phase's first step only (a resume loads the
   // trained motion instead).
   if (g->motion.valid() && step_ == config_.pretrain_steps) {
+    AlignmentOptions align;
+    align.depth_reach_px = config_.align_depth_reach;
+    align.consistency = config_.align_consistency;
     MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e,
-                                       disparity_fit_ ? &*disparity_fit_ : nullptr);
+                                       disparity_fit_ ? &*disparity_fit_ : nullptr, align);
     if (motion_start_hook_) {
       const size_t rows = start.rows.size(), boxes = start.boxes.size(), radii = start.radii.size();
       motion_start_hook_(start);

@@ -35,7 +35,32 @@ struct AlignmentOptions {
   double mask_weight = 0.5;     // a point outside the second mask weighs as a colour error of 0.5
   double turn_prior = 1e-3;     // damping towards no turn (per radian squared), for textureless objects
   int window = 1;               // track_object: earlier views aligned at once to each next one
+  // track_object: each mask pixel's depth becomes the nearest of the mask's depths within this
+  // many pixels (at 160 px width, scaled with the image; 0: as given). A disparity blurred over
+  // the silhouette reads the object's rim part way to the background behind it, which flattens
+  // the object and makes the alignment under-turn; the object lies in front of what it is
+  // blurred with, so the nearest depth close by undoes most of the mixing.
+  double depth_reach_px = 0.0;
+  // track_object, window 1: each pair's turn is checked by aligning the second view back to
+  // the first; where the two turns fail to undo each other by more than this fraction of the
+  // turn (and more than consistency_floor_deg), the pair takes no turn, the anchors' shift
+  // alone (0: no check).
+  double consistency = 0.0;
+  double consistency_floor_deg = 3.0;
 };
+
+// Whether an alignment of view a to view b (`forward`) and one of b back to a (`backward`)
+// undo each other's turn: the turn left after both, within options.consistency of the forward
+// turn or options.consistency_floor_deg. A symmetric object (a dumbbell, a disc) looks the same
+// at several turns, and each direction can settle in a turn of its own; on the family's
+// spinning dumbbells such a turn is wronger than no turn at all, which a pair that fails this
+// check takes in track_object (the anchors' shift alone).
+bool turns_agree(const Mat34& forward, const Mat34& backward, const AlignmentOptions& options);
+
+// Each pixel of `mask` (>= 128) takes the smallest valid depth (> 0, finite) of the mask's
+// pixels in the square of half-width `reach` about it; other pixels, and mask pixels with no
+// valid depth in their square, keep theirs.
+ImageF nearest_depth_within(const ImageF& depth, const Image8& mask, int reach);
 
 struct ObjectAlignment {
   Mat34 motion{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};  // world -> world, view a's object to view b's

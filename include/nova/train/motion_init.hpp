@@ -11,6 +11,7 @@
 #include "nova/model/scene.hpp"
 #include "nova/sampling/rigid_motion.hpp"
 #include "nova/train/disparity_fit.hpp"
+#include "nova/train/motion_alignment.hpp"
 
 namespace nova {
 
@@ -36,8 +37,10 @@ struct MotionStart {
   std::vector<float> radii;  // [K]: each object's radius in world units (kObjectRadiusName)
 };
 // `fit`: the scene's fit_disparity when the caller has it already (null: computed here).
+// `align`: how the frames' views are aligned (motion_alignment.hpp).
 MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& geo, const FieldConfig& field,
-                           int samples, Executor& trained, const DisparityFit* fit = nullptr);
+                           int samples, Executor& trained, const DisparityFit* fit = nullptr,
+                           const AlignmentOptions& align = {});
 
 // The box_coordinates row (c, l) of a cube of half-size `half` (world units) about the world
 // point `centre`: the box about the centre's image that holds the cube's image (in NDC the

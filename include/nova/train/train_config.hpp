@@ -36,6 +36,9 @@ struct TrainConfig : ModelConfig {
   // within rim_width (a fraction of the image width) of an object's mask (pixel_batch.hpp).
   float rim_rays = 0.0f;
   float rim_width = 0.03f;
+  // Rigid objects' start (AlignmentOptions::depth_reach_px, ::consistency; 0: off).
+  float align_depth_reach = 0.0f;
+  float align_consistency = 0.0f;
   NovelViewLossWeights weights;
   // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
   // public reference code's (reference); docs/training.md, "Loss conventions".
