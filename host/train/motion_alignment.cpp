@@ -13,6 +13,7 @@
 #include "nova/runtime/error.hpp"
 #include "train/float_plane.hpp"
 #include "train/parallel_for.hpp"
+#include "train/square_min.hpp"
 
 namespace nova {
 namespace {
@@ -282,29 +283,19 @@ ImageF nearest_depth_within(const ImageF& depth, const Image8& mask, int reach) 
   const size_t W = static_cast<size_t>(depth.width), H = static_cast<size_t>(depth.height);
   if (mask.width != depth.width || mask.height != depth.height)
     throw Error("nearest_depth_within: mask and depth differ in size", kExitInternal);
-  const float inf = std::numeric_limits<float>::infinity();
-  std::vector<float> v(W * H, inf), rows(W * H, inf);
+  // The mask's valid depths, every other cell out of reach of the minimum.
+  std::vector<float> v(W * H, std::numeric_limits<float>::infinity());
   for (size_t y = 0; y < H; ++y)
     for (size_t x = 0; x < W; ++x) {
       const float z = depth.data[y * W + x];
       if (mask.at(static_cast<int>(x), static_cast<int>(y)) >= 128 && z > 0 && std::isfinite(z)) v[y * W + x] = z;
     }
-  // A square window's minimum, separably: along each row, then along each column.
-  const ptrdiff_t r = std::max(reach, 0), w = static_cast<ptrdiff_t>(W), h = static_cast<ptrdiff_t>(H);
-  for (ptrdiff_t y = 0; y < h; ++y)
-    for (ptrdiff_t x = 0; x < w; ++x) {
-      float m = inf;
-      for (ptrdiff_t xx = std::max<ptrdiff_t>(0, x - r); xx <= std::min(w - 1, x + r); ++xx) m = std::min(m, v[static_cast<size_t>(y * w + xx)]);
-      rows[static_cast<size_t>(y * w + x)] = m;
-    }
+  const std::vector<float> nearest = detail::square_min(v, W, H, reach);
   ImageF out = depth;
-  for (ptrdiff_t y = 0; y < h; ++y)
-    for (ptrdiff_t x = 0; x < w; ++x) {
-      if (mask.at(static_cast<int>(x), static_cast<int>(y)) < 128) continue;
-      float m = inf;
-      for (ptrdiff_t yy = std::max<ptrdiff_t>(0, y - r); yy <= std::min(h - 1, y + r); ++yy) m = std::min(m, rows[static_cast<size_t>(yy * w + x)]);
-      if (m < inf) out.data[static_cast<size_t>(y * w + x)] = m;
-    }
+  for (size_t y = 0; y < H; ++y)
+    for (size_t x = 0; x < W; ++x)
+      if (mask.at(static_cast<int>(x), static_cast<int>(y)) >= 128 && std::isfinite(nearest[y * W + x]))
+        out.data[y * W + x] = nearest[y * W + x];
   return out;
 }
 

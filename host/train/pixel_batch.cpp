@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "nova/runtime/error.hpp"
+#include "train/square_min.hpp"
 
 namespace nova {
 
@@ -33,30 +34,14 @@ std::vector<std::vector<uint32_t>> pixel_regions(const std::vector<Image8>& mask
 std::vector<uint32_t> rim_pixels(const std::vector<std::vector<uint32_t>>& regions, int width, int height,
                                  int reach) {
   const size_t W = static_cast<size_t>(width), H = static_cast<size_t>(height);
-  std::vector<uint8_t> near(W * H, 0), rows(W * H, 0);
+  // 0 on the objects' pixels, 1 elsewhere: a square's minimum is 0 where it holds an object pixel.
+  std::vector<float> not_object(W * H, 1.0f);
   for (size_t k = 1; k < regions.size(); ++k)
-    for (uint32_t p : regions[k]) near[p] = 1;
-  // A square window's maximum, separably: along each row, then along each column.
-  const ptrdiff_t r = std::max(reach, 0);
-  for (size_t y = 0; y < H; ++y)
-    for (size_t x = 0; x < W; ++x) {
-      uint8_t m = 0;
-      for (ptrdiff_t d = -r; d <= r && !m; ++d) {
-        const ptrdiff_t xx = static_cast<ptrdiff_t>(x) + d;
-        if (xx >= 0 && xx < static_cast<ptrdiff_t>(W)) m = near[y * W + static_cast<size_t>(xx)];
-      }
-      rows[y * W + x] = m;
-    }
+    for (uint32_t p : regions[k]) not_object[p] = 0.0f;
+  const std::vector<float> near = detail::square_min(not_object, W, H, reach);
   std::vector<uint32_t> rim;
-  for (uint32_t p : regions[0]) {
-    const ptrdiff_t x = p % W, y = p / W;
-    bool hit = false;
-    for (ptrdiff_t d = -r; d <= r && !hit; ++d) {
-      const ptrdiff_t yy = y + d;
-      if (yy >= 0 && yy < static_cast<ptrdiff_t>(H)) hit = rows[static_cast<size_t>(yy) * W + static_cast<size_t>(x)] != 0;
-    }
-    if (hit) rim.push_back(p);
-  }
+  for (uint32_t p : regions[0])
+    if (near[p] == 0.0f) rim.push_back(p);
   return rim;
 }
 
