@@ -147,6 +147,36 @@ BOOST_AUTO_TEST_CASE(a_capped_work_group_runs_every_item) {
   }
 }
 
+// Asynchronous uploads land in order, even when each one overwrites the last, and their
+// staging blocks are freed by the runtime's own later calls (no event callbacks): never more
+// than kMaxStagedUploads wait, and none after a blocking transfer or finish.
+BOOST_AUTO_TEST_CASE(async_uploads_land_in_order_and_their_staging_is_freed) {
+  Runtime rt(test::runtime().info(), false);
+  const size_t n = 64, uploads = 3 * Runtime::kMaxStagedUploads;
+  Buffer b = rt.upload_floats(std::vector<float>(n, -1.0f));
+  size_t most = 0;
+  for (size_t u = 0; u < uploads; ++u) {
+    std::vector<float> v(n);
+    for (size_t i = 0; i < n; ++i) v[i] = static_cast<float>(u * n + i);
+    // Every second upload writes the whole buffer, the others its first half only.
+    rt.upload_async(b.get(), v.data(), (u % 2 ? n : n / 2) * sizeof(float));
+    most = std::max(most, rt.staged_uploads());
+  }
+  BOOST_TEST(most <= Runtime::kMaxStagedUploads);
+  const std::vector<float> out = rt.download_floats(b.get(), n);
+  BOOST_TEST(rt.staged_uploads() == 0u);
+  // The last upload (u = uploads - 1, odd) wrote the whole buffer.
+  for (size_t i = 0; i < n; ++i) BOOST_TEST(out[i] == static_cast<float>((uploads - 1) * n + i));
+  std::vector<float> half(n / 2, 7.0f);
+  rt.upload_async(b.get(), half.data(), half.size() * sizeof(float), (n / 2) * sizeof(float));
+  BOOST_TEST(rt.staged_uploads() <= 1u);
+  rt.finish();
+  BOOST_TEST(rt.staged_uploads() == 0u);
+  const std::vector<float> after = rt.download_floats(b.get(), n);
+  BOOST_TEST(after[0] == out[0]);
+  BOOST_TEST(after[n - 1] == 7.0f);
+}
+
 BOOST_AUTO_TEST_CASE(build_failure_shows_the_compiler_log) {
   Runtime& rt = test::runtime();
   try {

@@ -39,6 +39,7 @@ Runtime::Runtime(const DeviceInfo& device, bool profiling) : info_(device), prof
 
 Runtime::~Runtime() {
   if (queue_) clFinish(queue_);
+  free_staged_uploads(0);
   for (auto& [key, k] : kernels_) clReleaseKernel(k);
   for (auto& [key, p] : programs_)
     if (p) clReleaseProgram(p);
@@ -167,35 +168,36 @@ void Runtime::upload(cl_mem dst, const void* src, size_t bytes, size_t offset) {
   ++commands_.memory;
   cl_check(clEnqueueWriteBuffer(queue_, dst, CL_TRUE, offset, bytes, src, 0, nullptr, nullptr),
            "clEnqueueWriteBuffer");
+  free_staged_uploads(0);
 }
 
-namespace {
-void CL_CALLBACK free_staging(cl_event event, cl_int, void* block) {
-  delete[] static_cast<unsigned char*>(block);
-  clReleaseEvent(event);
+void Runtime::free_staged_uploads(size_t keep) {
+  while (!staged_.empty()) {
+    StagedUpload& s = staged_.front();
+    cl_int status = CL_QUEUED;
+    if (clGetEventInfo(s.done, CL_EVENT_COMMAND_EXECUTION_STATUS, sizeof(status), &status, nullptr) != CL_SUCCESS)
+      status = CL_COMPLETE;  // an event that cannot be read is waited for below
+    // Queued, submitted or running; a negative status is a write that failed: over as well.
+    if (status > CL_COMPLETE) {
+      if (staged_.size() <= keep) break;
+      clWaitForEvents(1, &s.done);
+    }
+    clReleaseEvent(s.done);
+    staged_.pop_front();
+  }
 }
-}  // namespace
 
 void Runtime::upload_async(cl_mem dst, const void* src, size_t bytes, size_t offset) {
   if (bytes == 0) return;
+  free_staged_uploads(kMaxStagedUploads - 1);
   tally(transfers_.writes, transfers_.write_bytes, transfers_.largest_write, bytes);
-  auto* block = new unsigned char[bytes];
-  std::memcpy(block, src, bytes);
-  cl_event done = nullptr;
+  StagedUpload s;
+  s.block = std::make_unique<unsigned char[]>(bytes);
+  std::memcpy(s.block.get(), src, bytes);
   ++commands_.memory;
-  const cl_int st = clEnqueueWriteBuffer(queue_, dst, CL_FALSE, offset, bytes, block, 0, nullptr, &done);
-  if (st != CL_SUCCESS) {
-    delete[] block;
-    cl_check(st, "clEnqueueWriteBuffer");
-  }
-  // The callback also runs when the command ends in error (a negative status): the block is
-  // freed either way.
-  const cl_int cb = clSetEventCallback(done, CL_COMPLETE, free_staging, block);
-  if (cb != CL_SUCCESS) {
-    clWaitForEvents(1, &done);
-    free_staging(done, CL_COMPLETE, block);
-    cl_check(cb, "clSetEventCallback");
-  }
+  cl_check(clEnqueueWriteBuffer(queue_, dst, CL_FALSE, offset, bytes, s.block.get(), 0, nullptr, &s.done),
+           "clEnqueueWriteBuffer");
+  staged_.push_back(std::move(s));
 }
 
 void Runtime::fill_floats(cl_mem dst, float value, size_t bytes, size_t offset) {
@@ -211,6 +213,7 @@ void Runtime::download(cl_mem src, void* dst, size_t bytes, size_t offset) {
   ++commands_.memory;
   cl_check(clEnqueueReadBuffer(queue_, src, CL_TRUE, offset, bytes, dst, 0, nullptr, nullptr),
            "clEnqueueReadBuffer");
+  free_staged_uploads(0);
 }
 
 void Runtime::fill_zero(cl_mem dst, size_t bytes, size_t offset) {
@@ -222,7 +225,10 @@ void Runtime::fill_zero(cl_mem dst, size_t bytes, size_t offset) {
            "clEnqueueFillBuffer");
 }
 
-void Runtime::finish() { cl_check(clFinish(queue_), "clFinish"); }
+void Runtime::finish() {
+  cl_check(clFinish(queue_), "clFinish");
+  free_staged_uploads(0);
+}
 
 Buffer Runtime::upload_floats(const std::vector<float>& v) {
   Buffer b = alloc(v.size() * sizeof(float));

@@ -4,6 +4,7 @@
 #include <CL/cl.h>
 
 #include <cstddef>
+#include <deque>
 #include <map>
 #include <memory>
 #include <set>
@@ -184,8 +185,14 @@ class Runtime {
   // Blocking: returns when the data is on the device, i.e. after everything queued before.
   void upload(cl_mem dst, const void* src, size_t bytes, size_t offset = 0);
   // Returns at once: the bytes are copied to a staging block that the queue writes from in
-  // order and frees when done, so the host never waits for the device to drain.
+  // order, so the host never waits for the device to drain. A block is freed once its write
+  // has completed, found by the runtime's own calls (the next upload_async, a blocking
+  // transfer, finish), never from an event callback: a callback that freed the block and
+  // released its event could leave the NVIDIA driver spinning in a later wait.
   void upload_async(cl_mem dst, const void* src, size_t bytes, size_t offset = 0);
+  // Staging blocks of upload_async not freed yet (at most kMaxStagedUploads).
+  size_t staged_uploads() const { return staged_.size(); }
+  static constexpr size_t kMaxStagedUploads = 256;
   // dst[i] = value for the floats of [offset, offset + bytes); queued, non-blocking.
   void fill_floats(cl_mem dst, float value, size_t bytes, size_t offset = 0);
   void download(cl_mem src, void* dst, size_t bytes, size_t offset = 0);
@@ -198,6 +205,14 @@ class Runtime {
 
  private:
   cl_program build_program(const std::string& family, const std::string& options);
+  // Frees the staging blocks whose writes have completed, oldest first, then waits for the
+  // oldest until at most `keep` remain (0: every one; after finish or a blocking transfer on
+  // the in-order queue they have all completed, so that waits for nothing).
+  void free_staged_uploads(size_t keep);
+  struct StagedUpload {
+    cl_event done = nullptr;
+    std::unique_ptr<unsigned char[]> block;
+  };
 
   DeviceInfo info_;
   cl_context context_ = nullptr;
@@ -211,6 +226,7 @@ class Runtime {
   TransferStats transfers_;
   CommandCounts commands_;
   std::set<LaunchRecord> launches_;
+  std::deque<StagedUpload> staged_;  // oldest first; one thread uses a Runtime
 };
 
 // Throws ClError when status is not CL_SUCCESS.
