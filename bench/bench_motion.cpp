@@ -12,11 +12,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <optional>
 
 #include "bench.hpp"
 #include "family_truth.hpp"
 #include "options.hpp"
 #include "nova/sampling/camera.hpp"
+#include "nova/train/disparity_edges.hpp"
 #include "nova/train/disparity_fit.hpp"
 #include "nova/data/scene_io.hpp"
 #include "nova/data/synth.hpp"
@@ -193,7 +195,7 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"depth-reach", "0"}, {"consistency", "0"}, {"made-masks", "off"}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"depth-reach", "0"}, {"consistency", "0"}, {"depth-auto", "off"}, {"made-masks", "off"}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
                  "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
@@ -201,7 +203,8 @@ int motion(const Args& args) {
                  "is aligned to at once; --edge PX: pixels of each mask's rim left out; --depth-reach PX: each mask pixel's "
                  "depth the nearest of the mask's within PX pixels at 160 px width (nova train --align-depth-reach; "
                  "default 0: as given); --consistency R: a frame pair whose turn the way back does not undo within R of it takes no turn "
-                 "(nova train --align-consistency; default 0: no check); --made-masks: track the objects "
+                 "(nova train --align-consistency; default 0: no check); --depth-auto: depth-reach 1 where the scene's "
+                 "step share (the column) is under 0.7, as nova train --align-depth-auto; --made-masks: track the objects "
                  "in the masks nova masks makes instead of the given ones (each true object by the made one that "
                  "shares the most pixels with it)\n";
     return 0;
@@ -226,7 +229,7 @@ int motion(const Args& args) {
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");
-  std::printf(" %6s", "shift");
+  std::printf(" %6s %10s", "shift", "step share");
   if (!runs.empty()) std::printf(" %13s %13s %7s", "trained error", "trained drift", "t.shift");
   std::printf("\n");
   double sum_error = 0, sum_drift = 0, sum_trained_error = 0, sum_trained_drift = 0;
@@ -241,14 +244,20 @@ int motion(const Args& args) {
       const Scene given = load_scene(dir.string(), load);
       write_motion_masks(given, make_motion_masks(given), (dir / "motion_masks").string(), true);
     }
+    // The share of the disparity's step at the silhouettes (disparity_edges.hpp), and with
+    // --depth-auto the reach training's align-depth-auto takes from it.
+    const std::optional<double> share = silhouette_step_share(load_scene(dir.string()));
+    AlignmentOptions seed_options = options;
+    if (o.flag("depth-auto") && seed_options.depth_reach_px == 0 && share && *share < kBlurredStepShare)
+      seed_options.depth_reach_px = 1;
     const auto t0 = std::chrono::steady_clock::now();
     const std::string run = runs.empty() ? "" : runs + "/family-" + std::to_string(seed);
-    const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"), run, options);
+    const std::vector<ObjectScore> scores = score_seed(int(seed), dir.string(), o.flag("exact-depth"), run, seed_options);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (const ObjectScore& s : scores) {
       std::printf("%5d %7d %6d %12.2f %11.2f %11.2f %8.1f / %7.1f %8.1f", s.seed, s.object, s.pairs, s.true_turn,
                   s.mean_error, s.worst_error, s.drift, s.chained_truth, seconds);
-      std::printf(" %6.2f", s.shift);
+      std::printf(" %6.2f %10s", s.shift, share ? std::to_string(*share).substr(0, 4).c_str() : "-");
       if (!runs.empty()) std::printf(" %13.2f %13.1f %7.2f", s.trained_error, s.trained_drift, s.trained_shift);
       std::printf("\n");
       if (s.pairs == 0) continue;

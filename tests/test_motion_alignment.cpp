@@ -10,6 +10,7 @@
 
 #include "nova/data/llff_poses.hpp"
 #include "nova/data/synth.hpp"
+#include "nova/train/disparity_edges.hpp"
 #include "nova/train/motion_alignment.hpp"
 #include "train/parallel_for.hpp"
 
@@ -350,6 +351,62 @@ BOOST_AUTO_TEST_CASE(parallel_for_runs_every_index_once_and_rethrows) {
                     }),
                     std::runtime_error);
   BOOST_TEST(done.load() == 99);
+}
+
+// silhouette_step_share against a disc whose disparity steps at its edge (1), the same step
+// box-blurred over 5 pixels (under kBlurredStepShare), a mask one pixel larger than the disc
+// (its rim reads the background: about 0) and the cases with no value.
+BOOST_AUTO_TEST_CASE(step_share_reads_where_the_disparity_steps) {
+  const int W = 40, H = 30;
+  const auto disc_scene = [&](double radius, double mask_radius, int blur) {
+    Scene s;
+    Frame f;
+    f.masks.assign(2, Image8(W, H, 1));
+    f.disparity.width = W, f.disparity.height = H;
+    f.disparity.data.assign(static_cast<size_t>(W) * H, 0.0f);
+    std::vector<float> d(static_cast<size_t>(W) * H);
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const double r = std::hypot(x - 20.0, y - 15.0);
+        d[static_cast<size_t>(y) * W + x] = r <= radius ? 2.0f : 0.5f;
+        if (r <= mask_radius) f.masks[1].data[static_cast<size_t>(y) * W + x] = 255;
+      }
+    for (int y = 0; y < H; ++y)  // a (2 blur + 1)^2 box, cut at the edges
+      for (int x = 0; x < W; ++x) {
+        double sum = 0;
+        int n = 0;
+        for (int v = std::max(0, y - blur); v <= std::min(H - 1, y + blur); ++v)
+          for (int u = std::max(0, x - blur); u <= std::min(W - 1, x + blur); ++u, ++n) sum += d[static_cast<size_t>(v) * W + u];
+        f.disparity.data[static_cast<size_t>(y) * W + x] = static_cast<float>(sum / n);
+      }
+    s.frames.assign(3, f);
+    return s;
+  };
+  const std::optional<double> sharp = silhouette_step_share(disc_scene(8, 8, 0));
+  BOOST_REQUIRE(sharp.has_value());
+  BOOST_TEST(*sharp == 1.0, boost::test_tools::tolerance(1e-9));
+  const std::optional<double> blurred = silhouette_step_share(disc_scene(8, 8, 2));
+  BOOST_REQUIRE(blurred.has_value());
+  // A 5-pixel box over a step of 1.5: the rim pixels read 0.32 of it above the pixels touching
+  // the mask (a reading against the background further out, 0.64, would be wrong).
+  BOOST_TEST(*blurred < kBlurredStepShare);
+  BOOST_TEST(*blurred == 0.32, boost::test_tools::tolerance(0.05));
+  const std::optional<double> wide_mask = silhouette_step_share(disc_scene(8, 9, 0));
+  BOOST_REQUIRE(wide_mask.has_value());
+  BOOST_TEST(std::abs(*wide_mask) < 0.05);
+  // No disparity; a mask too thin for interior pixels (a 3-pixel bar); no object in front.
+  Scene none = disc_scene(8, 8, 0);
+  for (Frame& f : none.frames) f.disparity = ImageF{};
+  BOOST_TEST(!silhouette_step_share(none).has_value());
+  Scene thin = disc_scene(8, 8, 0);
+  for (Frame& f : thin.frames)
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) f.masks[1].data[static_cast<size_t>(y) * W + x] = (y >= 14 && y <= 16) ? 255 : 0;
+  BOOST_TEST(!silhouette_step_share(thin).has_value());
+  Scene behind = disc_scene(8, 8, 0);
+  for (Frame& f : behind.frames)
+    for (float& v : f.disparity.data) v = 2.5f - v;
+  BOOST_TEST(!silhouette_step_share(behind).has_value());
 }
 
 BOOST_AUTO_TEST_SUITE_END()

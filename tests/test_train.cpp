@@ -15,6 +15,7 @@
 #include "nova/model/object_samples.hpp"
 #include "nova/sampling/rigid_motion.hpp"
 #include "nova/train/run_folder.hpp"
+#include "nova/train/disparity_edges.hpp"
 #include "nova/train/trainer.hpp"
 #include "nova/model/view_renderer.hpp"
 #include "scene_test_util.hpp"
@@ -848,6 +849,51 @@ BOOST_AUTO_TEST_CASE(mismatched_checkpoints_are_refused) {
   BOOST_CHECK_EXCEPTION(third.resume(), Error, [](const Error& e) {
     return std::string(e.what()).find("corrupt") != std::string::npos;
   });
+}
+
+// align-depth-auto: the trainer reads the scene's disparity once; the tiny scene's exact
+// disparity leaves the start's depth as given, the same disparity box-blurred over 5 pixels
+// takes the nearest depth within a pixel, and the run's config.ini holds the choice.
+BOOST_AUTO_TEST_CASE(align_depth_auto_reads_the_disparity_at_the_silhouettes) {
+  TrainConfig c = short_config(0, 1, 64, 8);
+  c.field.motion = ObjectMotion::Rigid;
+  c.align_depth_auto = true;
+  const auto chosen = [&](const Scene& scene) {
+    TempDir dir("depth_auto");
+    Trainer t(runtime(), scene, c, (dir / "run").string());
+    t.run({}, 0);
+    const std::string ini = read_all(dir / "run" / "config.ini");
+    return ini.find("align-depth-reach = 1") != std::string::npos ? 1
+           : ini.find("align-depth-reach = 0") != std::string::npos ? 0 : -1;
+  };
+  const Scene sharp = tiny_scene();
+  const std::optional<double> share = silhouette_step_share(sharp);
+  BOOST_REQUIRE(share.has_value());
+  BOOST_TEST(*share > kBlurredStepShare);
+  BOOST_TEST(chosen(sharp) == 0);
+  Scene blurred = sharp;
+  for (Frame& f : blurred.frames) {
+    const int W = f.disparity.width, H = f.disparity.height;
+    std::vector<float> out(f.disparity.data.size());
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        double sum = 0;
+        int n = 0;
+        for (int v = std::max(0, y - 2); v <= std::min(H - 1, y + 2); ++v)
+          for (int u = std::max(0, x - 2); u <= std::min(W - 1, x + 2); ++u, ++n) sum += f.disparity.data[static_cast<size_t>(v) * W + u];
+        out[static_cast<size_t>(y) * W + x] = static_cast<float>(sum / n);
+      }
+    f.disparity.data = out;
+  }
+  const std::optional<double> blurred_share = silhouette_step_share(blurred);
+  BOOST_REQUIRE(blurred_share.has_value());
+  BOOST_TEST(*blurred_share < kBlurredStepShare);
+  BOOST_TEST(chosen(blurred) == 1);
+  c.align_depth_reach = 2.0f;  // a reach given is kept
+  TempDir dir("depth_given");
+  Trainer t(runtime(), blurred, c, (dir / "run").string());
+  t.run({}, 0);
+  BOOST_TEST(read_all(dir / "run" / "config.ini").find("align-depth-reach = 2") != std::string::npos);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

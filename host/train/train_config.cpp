@@ -259,6 +259,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(float_option("align-depth-reach", "object-motion rigid: before the frames' alignment each mask pixel's depth becomes the nearest of the mask's within this many pixels (at 160 px width, scaled with the image), undoing a disparity blurred over the object's rim (0: as given)", 0.0, 64.0,
                            [](TrainConfig& c) -> float& { return c.align_depth_reach; }));
   o.back().before = "0";
+  o.push_back(bool_option("align-depth-auto", "object-motion rigid: align-depth-reach 1 where less than 0.7 of the disparity's step falls at the objects' silhouettes (a disparity blurred over them), else 0; the run's config.ini holds the choice",
+                          [](TrainConfig& c) -> bool& { return c.align_depth_auto; }));
+  o.back().before = "false";
   o.push_back(float_option("align-consistency", "object-motion rigid: each frame pair is also aligned back; a pair whose way back leaves more turn than this fraction of the turn found (and more than 3 degrees) takes no turn, as a symmetric object can give each direction a wrong turn of its own (0: no check)", 0.0, 100.0,
                            [](TrainConfig& c) -> float& { return c.align_consistency; }));
   o.back().before = "0";

@@ -8,6 +8,7 @@
 
 #include "nova/model/object_samples.hpp"
 #include "nova/runtime/error.hpp"
+#include "nova/train/disparity_edges.hpp"
 #include "nova/train/motion_init.hpp"
 #include "nova/train/pixel_batch.hpp"
 #include "train/metrics_log.hpp"
@@ -70,6 +71,13 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
       // config.ini says so.
       config_.free_space_scene_fit = config_.free_space_front = false;
     }
+  }
+  // The start's nearest depth where the disparity is blurred over the objects' silhouettes
+  // (disparity_edges.hpp): decided from the scene alone, so a resume decides the same.
+  if (config_.align_depth_auto && config_.align_depth_reach == 0.0f && config_.field.motion == ObjectMotion::Rigid &&
+      geometry_.num_objects > 0) {
+    const std::optional<double> share = silhouette_step_share(scene);
+    if (share && *share < kBlurredStepShare) config_.align_depth_reach = 1.0f;
   }
   if (config_.occupancy) {
     occupancy_ = std::make_unique<OccupancyEstimator>(geometry_.num_objects, config_.occupancy_res,

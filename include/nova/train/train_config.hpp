@@ -39,6 +39,10 @@ struct TrainConfig : ModelConfig {
   // Rigid objects' start (AlignmentOptions::depth_reach_px, ::consistency; 0: off).
   float align_depth_reach = 0.0f;
   float align_consistency = 0.0f;
+  // Rigid objects' start: align_depth_reach becomes 1 where the scene's disparity is blurred
+  // over the objects' silhouettes (silhouette_step_share below kBlurredStepShare), else 0;
+  // chosen when the trainer is made, and the run's config.ini holds the choice.
+  bool align_depth_auto = false;
   NovelViewLossWeights weights;
   // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
   // public reference code's (reference); docs/training.md, "Loss conventions".
