@@ -5,14 +5,17 @@
 // Helpers for the data-layer suites: unique temporary folders under /tmp and a cached tiny
 // synthetic scene that tests copy and then damage.
 #include <boost/test/unit_test.hpp>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
+#include <vector>
 #include <unistd.h>
 
 #include "nova/runtime/error.hpp"
 #include "nova/data/synth.hpp"
+#include "nova/model/scene.hpp"
 
 namespace nova::test {
 
@@ -41,6 +44,23 @@ class TempDir {
 };
 
 // The tiny synthetic scene (seed 7), generated once per process; returns its folder.
+// A (2 radius + 1)^2 box blur of `d`, the box cut at the image's edges: a disparity blurred
+// over the objects' silhouettes, as a depth network's.
+inline void box_blur(ImageF& d, int radius) {
+  const int W = d.width, H = d.height;
+  std::vector<float> out(d.data.size());
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      double sum = 0;
+      int n = 0;
+      for (int v = std::max(0, y - radius); v <= std::min(H - 1, y + radius); ++v)
+        for (int u = std::max(0, x - radius); u <= std::min(W - 1, x + radius); ++u, ++n)
+          sum += d.data[static_cast<size_t>(v) * W + u];
+      out[static_cast<size_t>(y) * W + x] = static_cast<float>(sum / n);
+    }
+  d.data = std::move(out);
+}
+
 inline const fs::path& cached_tiny_scene() {
   static TempDir dir("tiny-cache");
   static const fs::path scene = [] {

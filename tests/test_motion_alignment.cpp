@@ -12,6 +12,7 @@
 #include "nova/data/synth.hpp"
 #include "nova/train/disparity_edges.hpp"
 #include "nova/train/motion_alignment.hpp"
+#include "scene_test_util.hpp"
 #include "train/parallel_for.hpp"
 
 using namespace nova;
@@ -364,21 +365,13 @@ BOOST_AUTO_TEST_CASE(step_share_reads_where_the_disparity_steps) {
     f.masks.assign(2, Image8(W, H, 1));
     f.disparity.width = W, f.disparity.height = H;
     f.disparity.data.assign(static_cast<size_t>(W) * H, 0.0f);
-    std::vector<float> d(static_cast<size_t>(W) * H);
     for (int y = 0; y < H; ++y)
       for (int x = 0; x < W; ++x) {
         const double r = std::hypot(x - 20.0, y - 15.0);
-        d[static_cast<size_t>(y) * W + x] = r <= radius ? 2.0f : 0.5f;
+        f.disparity.data[static_cast<size_t>(y) * W + x] = r <= radius ? 2.0f : 0.5f;
         if (r <= mask_radius) f.masks[1].data[static_cast<size_t>(y) * W + x] = 255;
       }
-    for (int y = 0; y < H; ++y)  // a (2 blur + 1)^2 box, cut at the edges
-      for (int x = 0; x < W; ++x) {
-        double sum = 0;
-        int n = 0;
-        for (int v = std::max(0, y - blur); v <= std::min(H - 1, y + blur); ++v)
-          for (int u = std::max(0, x - blur); u <= std::min(W - 1, x + blur); ++u, ++n) sum += d[static_cast<size_t>(v) * W + u];
-        f.disparity.data[static_cast<size_t>(y) * W + x] = static_cast<float>(sum / n);
-      }
+    test::box_blur(f.disparity, blur);
     s.frames.assign(3, f);
     return s;
   };

@@ -872,19 +872,7 @@ BOOST_AUTO_TEST_CASE(align_depth_auto_reads_the_disparity_at_the_silhouettes) {
   BOOST_TEST(*share > kBlurredStepShare);
   BOOST_TEST(chosen(sharp) == 0);
   Scene blurred = sharp;
-  for (Frame& f : blurred.frames) {
-    const int W = f.disparity.width, H = f.disparity.height;
-    std::vector<float> out(f.disparity.data.size());
-    for (int y = 0; y < H; ++y)
-      for (int x = 0; x < W; ++x) {
-        double sum = 0;
-        int n = 0;
-        for (int v = std::max(0, y - 2); v <= std::min(H - 1, y + 2); ++v)
-          for (int u = std::max(0, x - 2); u <= std::min(W - 1, x + 2); ++u, ++n) sum += f.disparity.data[static_cast<size_t>(v) * W + u];
-        out[static_cast<size_t>(y) * W + x] = static_cast<float>(sum / n);
-      }
-    f.disparity.data = out;
-  }
+  for (Frame& f : blurred.frames) box_blur(f.disparity, 2);
   const std::optional<double> blurred_share = silhouette_step_share(blurred);
   BOOST_REQUIRE(blurred_share.has_value());
   BOOST_TEST(*blurred_share < kBlurredStepShare);
