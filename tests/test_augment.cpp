@@ -184,12 +184,14 @@ BOOST_AUTO_TEST_CASE(composite_target) {
   // Far from object 1 (both original and warped) the composite is the original frame.
   BOOST_TEST(a.rgb.at(2, 2, 0) == f.rgb.at(2, 2, 0));
   // Object 1's old place, where no warped object stands now, has no target: the frame
-  // shows object 1 there while every mask is empty. Everywhere else the target is kept.
+  // shows object 1 there while every mask is empty; nor has warped object 1 where it meets
+  // object 2 (warped_object_over_another_has_no_target). Everywhere else the target is kept.
   size_t vacated = 0;
   for (size_t p = 0; p < f.masks[1].data.size(); ++p) {
     const bool hole = f.masks[1].data[p] > 0 && a.masks[1].data[p] < 128;
+    const bool overlap = a.masks[1].data[p] >= 128 && f.masks[2].data[p] > 0;
     vacated += hole;
-    BOOST_TEST(a.valid[0].data[p] == (hole ? 0 : 255), "pixel " << p);
+    BOOST_TEST(a.valid[0].data[p] == (hole || overlap ? 0 : 255), "pixel " << p);
   }
   BOOST_TEST(vacated > 100u);
   // Each NeRF's own view (the reference conventions' per-NeRF targets): the frame for the
@@ -199,6 +201,60 @@ BOOST_AUTO_TEST_CASE(composite_target) {
   BOOST_TEST(a.images[2].data == f.rgb.data);
   BOOST_TEST(a.images[1].data == warp_image(f.rgb, rotation_homography(f.camera, rot)).data);
   BOOST_TEST(a.images[1].data != f.rgb.data);
+}
+
+// A warped object that lands on another object's pixels: each NeRF renders from a camera of
+// its own, so which of the two is in front there is unknown, and those pixels get no target;
+// the warped object's other pixels keep theirs.
+BOOST_AUTO_TEST_CASE(warped_object_over_another_has_no_target) {
+  Frame f;
+  f.camera.width = 96;
+  f.camera.height = 48;
+  f.camera.fx = f.camera.fy = 60.0;
+  f.camera.cx = 48.0;
+  f.camera.cy = 24.0;
+  f.rgb = Image8(96, 48, 3, 90);
+  f.masks.assign(3, Image8(96, 48, 1, 0));
+  for (int y = 16; y < 32; ++y)
+    for (int x = 40; x < 56; ++x) f.masks[1].at(x, y) = 255;  // object 1: a square in the middle
+  const CameraRotation rot{RotationAxis::y, 20.0};
+  const Image8 moved = warp_image(f.masks[1], rotation_homography(f.camera, rot));
+  int left = 96, right = -1;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 96; ++x)
+      if (moved.at(x, y) >= 128) left = std::min(left, x), right = std::max(right, x);
+  BOOST_REQUIRE(right - left > 10);
+  BOOST_REQUIRE((right < 40 || left >= 56));  // the turned square has left its old place
+  // Object 2 on the turned square's outer half (away from its old place), and 3 px beyond.
+  const int middle = (left + right) / 2;
+  const int from = left >= 56 ? middle : left - 3, to = left >= 56 ? right + 3 : middle;
+  for (int y = 0; y < 48; ++y)
+    for (int x = from; x <= to; ++x) f.masks[2].at(x, y) = 255;
+  for (size_t p = 0; p < f.masks[0].data.size(); ++p)
+    f.masks[0].data[p] = (f.masks[1].data[p] || f.masks[2].data[p]) ? 0 : 255;
+
+  const AugmentedFrame a = augment_frame(f, {rot, std::nullopt});
+  size_t overlap = 0, alone = 0, vacated = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 96; ++x) {
+      const bool covers = moved.at(x, y) >= 128, other = f.masks[2].at(x, y) > 0, old = f.masks[1].at(x, y) > 0;
+      const uint8_t v = a.valid[0].at(x, y);
+      if (covers && other) {
+        ++overlap;
+        BOOST_TEST(v == 0, "overlap at " << x << ", " << y);
+      } else if (covers) {
+        ++alone;
+        BOOST_TEST(v == 255, "warped object alone at " << x << ", " << y);
+      } else if (old) {
+        ++vacated;
+        BOOST_TEST(v == 0, "vacated at " << x << ", " << y);
+      } else {
+        BOOST_TEST(v == 255, "untouched at " << x << ", " << y);
+      }
+    }
+  BOOST_TEST(overlap > 20u);
+  BOOST_TEST(alone > 20u);
+  BOOST_TEST(vacated > 100u);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

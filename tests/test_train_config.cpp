@@ -10,6 +10,7 @@
 #include "nova/runtime/error.hpp"
 #include "nova/model/field_graphs.hpp"
 #include "nova/train/train_config.hpp"
+#include "train/step_batch.hpp"
 
 using namespace nova;
 
@@ -99,6 +100,35 @@ BOOST_AUTO_TEST_CASE(a_run_written_before_an_option_existed_keeps_its_behaviour)
   const TrainConfig now = parse_config_text(format_config(preset_config("quick")), "config.ini",
                                             nullptr, ConfigFile::RunFile);
   BOOST_TEST(format_config(now) == format_config(preset_config("quick")));
+}
+
+// Augmentation from augment-start on, every augment-every-th joint step, until augment-stop
+// (0: to the end); a stop at or before the start would augment nothing and is refused.
+BOOST_AUTO_TEST_CASE(augmentation_stops_where_augment_stop_says) {
+  TrainConfig c = preset_config("quick");
+  c.augment_start = 200;
+  c.augment_every = 2;
+  c.augment_stop = 1200;
+  BOOST_TEST(!detail::augmented_step(c, true, 199));
+  BOOST_TEST(detail::augmented_step(c, true, 200));
+  BOOST_TEST(!detail::augmented_step(c, true, 201));
+  BOOST_TEST(detail::augmented_step(c, true, 1198));
+  BOOST_TEST(!detail::augmented_step(c, true, 1200));
+  BOOST_TEST(!detail::augmented_step(c, true, 1202));
+  BOOST_TEST(!detail::augmented_step(c, false, 200));  // pretraining
+  c.augment_stop = 0;
+  BOOST_TEST(detail::augmented_step(c, true, 1202));
+  validate(c);
+  c.augment_stop = 200;
+  try {
+    validate(c);
+    BOOST_ERROR("augment-stop 200 with augment-start 200 was accepted");
+  } catch (const Error& e) {
+    BOOST_TEST(std::string(e.what()).find("option 'augment-stop': 200 is not after augment-start 200") !=
+               std::string::npos, e.what());
+  }
+  c.augment = false;
+  validate(c);  // nothing to stop
 }
 
 BOOST_AUTO_TEST_SUITE_END()

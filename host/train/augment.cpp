@@ -92,6 +92,7 @@ AugmentedFrame augment_frame(const Frame& frame,
   a.cameras.assign(size_t(1 + k_objects), frame.camera);
   a.valid.assign(size_t(1 + k_objects), Image8(frame.rgb.width, frame.rgb.height, 1, 255));
   a.images.assign(size_t(1 + k_objects), frame.rgb);
+  std::vector<Image8> warped(size_t(1 + k_objects));  // each turned object's own warped mask
   for (int k = 1; k <= k_objects; ++k) {
     if (!rotations[k - 1]) continue;
     const auto h = rotation_homography(frame.camera, *rotations[k - 1]);
@@ -99,6 +100,7 @@ AugmentedFrame augment_frame(const Frame& frame,
     a.images[k] = warp_image(frame.rgb, h);
     const Image8& img = a.images[k];
     a.masks[k] = warp_image(frame.masks[k], h, 0, &a.valid[k]);
+    warped[size_t(k)] = a.masks[k];
     // Warped object over the composite so far, by its (fractional) warped mask; the
     // background loses every pixel the warped object covers (mask >= 0.5), as the
     // reference removes object pixels from the static NeRF's sampling mask. Objects are
@@ -118,15 +120,22 @@ AugmentedFrame augment_frame(const Frame& frame,
   }
   // Where a turned object stood in the frame and no warped object stands now, the frame
   // shows the object while every mask says empty; the background behind it was never seen,
-  // so the pixel has no target: such a pixel is left out (valid[0] = 0).
+  // so the pixel has no target. Where a warped object meets another object (warped or where
+  // the frame shows it), which of the two is in front is not known: each object renders from
+  // a camera of its own, and pasting the warped one on top would tell the other one's NeRF
+  // that it is absent where it stands. Such pixels are left out (valid[0] = 0).
   for (size_t p = 0; p < a.valid[0].data.size(); ++p) {
     bool vacated = false, covered = false;
+    int present = 0;
     for (int k = 1; k <= k_objects; ++k) {
-      if (!rotations[k - 1]) continue;
+      const bool turned = rotations[k - 1].has_value();
+      const bool here = turned ? warped[size_t(k)].data[p] >= 128 : frame.masks[k].data[p] > 0;
+      present += here;
+      if (!turned) continue;
       vacated |= frame.masks[k].data[p] > 0;
-      covered |= a.masks[k].data[p] >= 128;
+      covered |= here;
     }
-    if (vacated && !covered) a.valid[0].data[p] = 0;
+    if ((vacated && !covered) || (covered && present > 1)) a.valid[0].data[p] = 0;
   }
   return a;
 }

@@ -10,6 +10,11 @@
 
 namespace nova::detail {
 
+bool augmented_step(const TrainConfig& c, bool joint, long phase_step) {
+  return joint && c.augment && phase_step >= c.augment_start && (c.augment_stop == 0 || phase_step < c.augment_stop) &&
+         (phase_step - c.augment_start) % c.augment_every == 0;
+}
+
 StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std::vector<uint32_t>>>& regions,
                           const TrainConfig& c, bool joint, long phase_step, int nerfs, bool want_nerf_images,
                           std::mt19937& rng) {
@@ -20,8 +25,7 @@ StepBatch draw_step_batch(const Scene& scene, const std::vector<std::vector<std:
     for (size_t tries = 0; regions[fi][0].empty() && tries < F; ++tries) fi = (fi + 1) % F;
   const Frame& frame = scene.frames[fi];
 
-  bool augmented = joint && c.augment && phase_step >= c.augment_start &&
-                         (phase_step - c.augment_start) % c.augment_every == 0;
+  bool augmented = augmented_step(c, joint, phase_step);
   PixelBatch batch;
   std::vector<Camera> cameras(static_cast<size_t>(nerfs), frame.camera);
   RimRays rim;

@@ -22,6 +22,10 @@ struct StepBatch {
   std::vector<Image8> nerf_images;  // each NeRF's target image when augmented; empty: the frame
 };
 
+// Whether joint step `phase_step` is augmented: from augment_start on, every augment_every-th
+// step, until augment_stop (0: to the end). Pretraining steps never are.
+bool augmented_step(const TrainConfig& config, bool joint, long phase_step);
+
 // Draws the step's frame and `config.rays` pixels: pretraining from background pixels only,
 // joint training from every region, augmented on the steps the configuration says.
 // `regions` holds each frame's pixel regions (pixel_regions). `nerf_images`: keep each NeRF's

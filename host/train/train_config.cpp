@@ -200,6 +200,9 @@ std::vector<ConfigOption> make_options() {
                          [](TrainConfig& c) -> int& { return c.augment_every; }));
   o.push_back(int_option("augment-start", "joint steps before the first augmented one", 0, kBig,
                          [](TrainConfig& c) -> int& { return c.augment_start; }));
+  o.push_back(int_option("augment-stop", "joint step from which no step is augmented, so that the last steps fit the frames themselves (0: augmented to the end)", 0, kBig,
+                         [](TrainConfig& c) -> int& { return c.augment_stop; }));
+  o.back().before = "0";
   o.push_back(float_option("augment-degrees", "largest rotation of an object camera (about its x or y axis)", 0.0, 90.0,
                            [](TrainConfig& c) -> float& { return c.augment_degrees; }));
   o.push_back(float_option("w-full-rgb", "weight of the composite RGB loss", 0.0, 1e6,
@@ -378,6 +381,9 @@ void validate(const TrainConfig& c) {
   if (c.free_space_front && !c.free_space_scene_fit)
     throw Error("option 'free-space-front': an object's front is read from the disparity placed by the scene's fit; "
                 "it needs 'free-space-scene-fit true'");
+  if (c.augment && c.augment_stop > 0 && c.augment_stop <= c.augment_start)
+    throw Error("option 'augment-stop': " + std::to_string(c.augment_stop) + " is not after augment-start " +
+                std::to_string(c.augment_start) + ", so no step would be augmented (pass --augment false for that)");
   const NovelViewLossWeights& w = c.weights;
   if (c.steps > 0 && w.full_rgb + w.nerf_rgb + w.mask + w.blending + w.alpha + w.order <= 0)
     throw Error("options 'w-*': every loss weight is 0, joint training would have no loss");

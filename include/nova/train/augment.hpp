@@ -4,7 +4,9 @@
 // image and mask in the rotated camera are exactly the original ones warped by the
 // homography K R K^-1 (up to resampling). The target composite is the warped objects over
 // the original image, with the warped objects' pixels removed from the background mask; a
-// turned object's old place, where no warped object stands, has no target (unseen background).
+// turned object's old place, where no warped object stands, has no target (unseen background),
+// nor has a warped object where it meets another object (which one is in front is unknown:
+// each renders from a camera of its own).
 //
 // Pixel coordinates follow camera.hpp: pixel (i, j) is the point (i, j), no half-pixel
 // offset; bilinear sampling reads pixels floor(x), floor(x) + 1. Plain C++, no OpenCV.
@@ -46,7 +48,8 @@ struct AugmentedFrame {
   std::vector<Image8> masks;   // 1 + K: background with warped objects removed, warped objects
   std::vector<Camera> cameras; // per NeRF: 0 unchanged, k rotated (or unchanged)
   std::vector<Image8> valid;   // per NeRF: where the warp had source pixels; 0: where the
-                               // target is known (not a turned object's uncovered old place)
+                               // target is known (not a turned object's uncovered old place,
+                               // nor a warped object over another object)
   std::vector<Image8> images;  // per NeRF: the frame as its camera sees it (0: the frame, k:
                                // the frame warped with object k's homography, or the frame)
 };

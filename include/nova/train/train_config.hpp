@@ -31,6 +31,7 @@ struct TrainConfig : ModelConfig {
   bool augment = true;
   int augment_every = 3;         // every n-th joint step is augmented
   int augment_start = 0;         // joint steps before the first augmented one (warm-up)
+  int augment_stop = 0;          // joint step from which none is augmented (0: to the end)
   float augment_degrees = 20.0f;
   // Joint steps: of the background's rays, this share comes from the ring of background pixels
   // within rim_width (a fraction of the image width) of an object's mask (pixel_batch.hpp).
