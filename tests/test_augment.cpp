@@ -227,7 +227,7 @@ BOOST_AUTO_TEST_CASE(warped_object_over_another_has_no_target) {
   BOOST_REQUIRE((right < 40 || left >= 56));  // the turned square has left its old place
   // Object 2 on the turned square's outer half (away from its old place), and 3 px beyond.
   const int middle = (left + right) / 2;
-  const int from = left >= 56 ? middle : left - 3, to = left >= 56 ? right + 3 : middle;
+  const int from = left >= 56 ? middle : std::max(0, left - 3), to = left >= 56 ? std::min(95, right + 3) : middle;
   for (int y = 0; y < 48; ++y)
     for (int x = from; x <= to; ++x) f.masks[2].at(x, y) = 255;
   for (size_t p = 0; p < f.masks[0].data.size(); ++p)
