@@ -17,18 +17,6 @@ double median(std::vector<float>& v) {
   return m;
 }
 
-// 1 where every cell within `reach` (a square) is set; grow: where any is.
-std::vector<float> shrink(const std::vector<float>& m, size_t w, size_t h, int reach) {
-  return detail::square_min(m, w, h, reach);
-}
-std::vector<float> grow(const std::vector<float>& m, size_t w, size_t h, int reach) {
-  std::vector<float> inv(m.size());
-  for (size_t i = 0; i < m.size(); ++i) inv[i] = 1.0f - m[i];
-  std::vector<float> out = detail::square_min(inv, w, h, reach);
-  for (float& v : out) v = 1.0f - v;
-  return out;
-}
-
 }  // namespace
 
 std::optional<double> silhouette_step_share(const Scene& scene) {
@@ -42,8 +30,10 @@ std::optional<double> silhouette_step_share(const Scene& scene) {
       if (static_cast<size_t>(mask.width) != w || static_cast<size_t>(mask.height) != h) continue;
       std::vector<float> m(w * h);
       for (size_t i = 0; i < m.size(); ++i) m[i] = mask.data[i] >= 128 ? 1.0f : 0.0f;
-      const std::vector<float> inner1 = shrink(m, w, h, 1), inner2 = shrink(m, w, h, 2);
-      const std::vector<float> outer1 = grow(m, w, h, 1), outer2 = grow(m, w, h, 2), outer4 = grow(m, w, h, 4);
+      // 1 where every pixel within the reach (a square) is inside the mask; outer: where any is.
+      const std::vector<float> inner1 = detail::square_min(m, w, h, 1), inner2 = detail::square_min(m, w, h, 2);
+      const std::vector<float> outer1 = detail::square_max(m, w, h, 1), outer2 = detail::square_max(m, w, h, 2),
+                               outer4 = detail::square_max(m, w, h, 4);
       std::vector<float> rim, touching, interior, far;
       for (size_t i = 0; i < m.size(); ++i) {
         const float v = d.data[i];
