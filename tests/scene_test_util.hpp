@@ -43,7 +43,6 @@ class TempDir {
   fs::path path_;
 };
 
-// The tiny synthetic scene (seed 7), generated once per process; returns its folder.
 // A (2 radius + 1)^2 box blur of `d`, the box cut at the image's edges: a disparity blurred
 // over the objects' silhouettes, as a depth network's.
 inline void box_blur(ImageF& d, int radius) {
@@ -61,6 +60,7 @@ inline void box_blur(ImageF& d, int radius) {
   d.data = std::move(out);
 }
 
+// The tiny synthetic scene (seed 7), generated once per process; returns its folder.
 inline const fs::path& cached_tiny_scene() {
   static TempDir dir("tiny-cache");
   static const fs::path scene = [] {
