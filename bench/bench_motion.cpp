@@ -57,6 +57,12 @@ struct ObjectScore {
   // Where a frame pair's motion carries the object's true centre, off the true centre of the
   // second frame, in the object's radii (mean over pairs): the start's and the trained one's.
   double shift = 0, trained_shift = -1;
+  // The object's longest axis carried from the first frame by the start's poses, off the true
+  // axis (degrees, as lines, mean over the later frames): what a rod's silhouette shows.
+  double axis = 0;
+  // Each anchor's depth from its frame's camera over the true centre's (mean over the frames):
+  // how far the disparity places the object.
+  double depth_ratio = 0;
 };
 
 // Object k's turn from frame a to frame b in a trained trajectory [K, F, 6]: a world point of
@@ -151,6 +157,10 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
         anchors.erase(anchors.begin() + long(*j));
       }
     }
+    for (size_t j = 0; j < seen.size(); ++j) {
+      const Camera& c = scene.frames[size_t(seen[j])].camera;
+      s.depth_ratio += camera_project(c, anchors[j])[2] / camera_project(c, true_centre(k, seen[j]))[2] / double(seen.size());
+    }
     const std::vector<Mat34> poses = track_object(views, anchors, options);
     for (size_t j = 1; j < seen.size(); ++j) {
       const int a = seen[j - 1], b = seen[j];
@@ -164,6 +174,24 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
       s.shift += distance(apply_rigid(poses[j], apply_rigid(invert_rigid(poses[j - 1]), true_centre(k, a))),
                           true_centre(k, b)) / radius;
       ++s.pairs;
+    }
+    {
+      const SynthVec& size = world.scene().objects[size_t(k - 1)].shape.size;
+      const size_t longest = size_t(std::max_element(size.begin(), size.end()) - size.begin());
+      const auto true_axis = [&](int i) {  // the loaded world's direction of the longest axis at frame i
+        const Mat3 r = multiply(Rc, rotation_of(world.object_pose(k, frame_time(i, F))));
+        return Vec3{r[longest], r[3 + longest], r[6 + longest]};
+      };
+      const Vec3 first = true_axis(seen.empty() ? 0 : seen.front());
+      for (size_t j = 1; j < seen.size(); ++j) {
+        const Mat3 carry = multiply(rotation_of(poses[j]), transpose(rotation_of(poses.front())));
+        const Vec3 found{carry[0] * first[0] + carry[1] * first[1] + carry[2] * first[2],
+                         carry[3] * first[0] + carry[4] * first[1] + carry[5] * first[2],
+                         carry[6] * first[0] + carry[7] * first[1] + carry[8] * first[2]};
+        const Vec3 truth = true_axis(seen[j]);
+        const double c = std::fabs(found[0] * truth[0] + found[1] * truth[1] + found[2] * truth[2]);
+        s.axis += std::acos(std::min(1.0, c)) * 180.0 / 3.14159265358979323846 / double(seen.size() - 1);
+      }
     }
     const Mat3 chain = seen.empty() ? Mat3{1, 0, 0, 0, 1, 0, 0, 0, 1}
                                     : multiply(rotation_of(poses.back()), transpose(rotation_of(poses.front())));
@@ -195,7 +223,7 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"depth-reach", "0"}, {"consistency", "0"}, {"depth-auto", "off"}, {"made-masks", "off"}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"depth-reach", "0"}, {"consistency", "0"}, {"depth-auto", "off"}, {"made-masks", "off"}, {"silhouette", "off"}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
                  "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
@@ -206,7 +234,8 @@ int motion(const Args& args) {
                  "(nova train --align-consistency; default 0: no check); --depth-auto: depth-reach 1 where the scene's "
                  "step share (the column) is under 0.7, as nova train --align-depth-auto; --made-masks: track the objects "
                  "in the masks nova masks makes instead of the given ones (each true object by the made one that "
-                 "shares the most pixels with it)\n";
+                 "shares the most pixels with it); --silhouette: a pair too thin to align by its interior turns as its "
+                 "masks' principal axes do instead of not at all (nova train --align-silhouette true)\n";
     return 0;
   }
   const std::string runs = o.str("runs");
@@ -226,10 +255,11 @@ int motion(const Args& args) {
   };
   number("depth-reach", 64, options.depth_reach_px);
   number("consistency", 100, options.consistency);
+  options.silhouette_turns = o.flag("silhouette");
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",
               "error worst", "drift / whole turn", "seconds");
-  std::printf(" %6s %10s", "shift", "step share");
+  std::printf(" %6s %10s %9s %6s", "shift", "step share", "axis err", "depth");
   if (!runs.empty()) std::printf(" %13s %13s %7s", "trained error", "trained drift", "t.shift");
   std::printf("\n");
   double sum_error = 0, sum_drift = 0, sum_trained_error = 0, sum_trained_drift = 0;
@@ -257,7 +287,7 @@ int motion(const Args& args) {
     for (const ObjectScore& s : scores) {
       std::printf("%5d %7d %6d %12.2f %11.2f %11.2f %8.1f / %7.1f %8.1f", s.seed, s.object, s.pairs, s.true_turn,
                   s.mean_error, s.worst_error, s.drift, s.chained_truth, seconds);
-      std::printf(" %6.2f %10s", s.shift, share ? std::to_string(*share).substr(0, 4).c_str() : "-");
+      std::printf(" %6.2f %10s %9.1f %6.2f", s.shift, share ? std::to_string(*share).substr(0, 4).c_str() : "-", s.axis, s.depth_ratio);
       if (!runs.empty()) std::printf(" %13.2f %13.1f %7.2f", s.trained_error, s.trained_drift, s.trained_shift);
       std::printf("\n");
       if (s.pairs == 0) continue;

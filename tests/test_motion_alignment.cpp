@@ -12,6 +12,7 @@
 #include "nova/data/synth.hpp"
 #include "nova/train/disparity_edges.hpp"
 #include "nova/train/motion_alignment.hpp"
+#include "nova/train/silhouette_axis.hpp"
 #include "scene_test_util.hpp"
 #include "train/parallel_for.hpp"
 
@@ -135,13 +136,14 @@ Mat3 turn_between(const Pose34& p0, const Pose34& p1) {
   return t;
 }
 
-// Frames first.. first + count - 1 of the default synthetic scene, rendered with exact depth.
+// Frames first.. first + count - 1 of a synthetic scene (the default one unless named),
+// rendered with exact depth.
 struct Video {
-  const SynthWorld world{"default", 0};
+  const SynthWorld world;
   std::vector<Camera> cameras;
   std::vector<SynthRender> renders;
   std::vector<double> times;
-  Video(int first, int count) {
+  Video(int first, int count, const std::string& preset = "default", uint32_t seed = 0) : world(preset, seed) {
     const int F = world.preset().frames;
     for (int i = first; i < first + count; ++i) {
       times.push_back(frame_time(i, F));
@@ -400,6 +402,122 @@ BOOST_AUTO_TEST_CASE(step_share_reads_where_the_disparity_steps) {
   for (Frame& f : behind.frames)
     for (float& v : f.disparity.data) v = 2.5f - v;
   BOOST_TEST(!silhouette_step_share(behind).has_value());
+}
+
+
+namespace {
+
+double dot3(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// The family's test seed 101: one rod (0.24 long, 0.018 thick, two or three pixels wide) that
+// turns 12.4 degrees a frame about a tilted axis; its long axis is the shape's y.
+struct RodVideo : Video {
+  RodVideo() : Video(0, 14, "family", 101) {}
+  Vec3 axis(size_t i) const {
+    const Pose34 p = world.object_pose(1, times[i]);
+    return {p[1], p[5], p[9]};
+  }
+  std::vector<Vec3> centres() const {
+    std::vector<Vec3> c;
+    for (double t : times) {
+      const Pose34 p = world.object_pose(1, t);
+      c.push_back({p[3], p[7], p[11]});
+    }
+    return c;
+  }
+};
+
+// Angle between two lines (radians).
+double line_angle(const Vec3& a, const Vec3& b) {
+  return std::acos(std::min(1.0, std::fabs(dot3(a, b)) / std::sqrt(dot3(a, a) * dot3(b, b))));
+}
+
+}  // namespace
+
+// silhouette_axes against the rod's true axis in every frame that shows it whole or cut by the
+// border. The tilt's sign out of the image plane cannot be seen, so a frame's axis is scored
+// against the truth and its mirror image in the plane square to the line of sight, the nearer
+// of the two. Measured: every frame elongated (seven cut by the border, which take an uncut
+// neighbour's tilt), mean 3.2 degrees, worst 7.1. Bounds 6.5 and 14 degrees, twice those: a rod
+// two pixels wide reads its length to a pixel or two, which moves a frame's tilt by degrees.
+BOOST_AUTO_TEST_CASE(silhouette_axes_follow_a_rod) {
+  const RodVideo video;
+  const std::vector<ObjectView> views = video.views(1);
+  const std::vector<Vec3> centres = video.centres();
+  const std::vector<std::optional<Vec3>> axes = silhouette_axes(views, centres);
+  BOOST_TEST_REQUIRE(axes.size() == views.size());
+  double sum = 0, worst = 0;
+  int found = 0;
+  for (size_t i = 0; i < axes.size(); ++i) {
+    if (!axes[i]) continue;
+    const SilhouetteAxis s = silhouette_axis(views[i], centres[i]);
+    const Vec3 t = video.axis(i);
+    const double along = dot3(t, s.toward);
+    const Vec3 mirrored{t[0] - 2 * along * s.toward[0], t[1] - 2 * along * s.toward[1], t[2] - 2 * along * s.toward[2]};
+    const double e = std::min(line_angle(*axes[i], t), line_angle(*axes[i], mirrored));
+    BOOST_TEST_MESSAGE("frame " << i << ": axis off by " << e / kDegree << " degrees" << (s.clipped ? " (cut)" : ""));
+    sum += e;
+    worst = std::max(worst, e);
+    ++found;
+  }
+  BOOST_TEST(found == 14);
+  BOOST_TEST(sum / std::max(found, 1) < 6.5 * kDegree);
+  BOOST_TEST(worst < 14 * kDegree);
+}
+
+// A box's, a sphere's or a torus's mask is not a rod's: no axis.
+BOOST_AUTO_TEST_CASE(silhouette_axes_need_an_elongated_mask) {
+  const Video video(0, 3);
+  for (int k = 1; k <= video.world.objects(); ++k)
+    for (const auto& axis : silhouette_axes(video.views(k), video.anchors(k))) BOOST_TEST(!axis.has_value());
+}
+
+// turn_onto: a rotation (orthonormal, determinant 1) that takes `from` onto `to` and the pivot
+// onto the destination; a rod's reverse axis is the same rod, so the turn is the smaller one.
+BOOST_AUTO_TEST_CASE(turn_onto_turns_the_axis_about_the_pivot) {
+  const Vec3 from{1, 0, 0}, to{0.6, 0.8, 0}, pivot{1, 2, 3}, destination{-1, 0.5, 2};
+  for (const Vec3& target : {to, Vec3{-0.6, -0.8, 0}}) {
+    const Mat34 m = turn_onto(from, target, pivot, destination);
+    const Vec3 p = apply_rigid(m, pivot);
+    for (int k = 0; k < 3; ++k) BOOST_TEST(std::fabs(p[k] - destination[k]) < 1e-12);
+    const Mat3 r = rotation_of(m);
+    const Vec3 turned{r[0], r[3], r[6]};  // R (1, 0, 0)
+    for (int k = 0; k < 3; ++k) BOOST_TEST(std::fabs(turned[k] - to[k]) < 1e-12);
+    const double det = r[0] * (r[4] * r[8] - r[5] * r[7]) - r[1] * (r[3] * r[8] - r[5] * r[6]) + r[2] * (r[3] * r[7] - r[4] * r[6]);
+    BOOST_TEST(std::fabs(det - 1) < 1e-12);
+    BOOST_TEST(std::fabs(angle_between(r, {1, 0, 0, 0, 1, 0, 0, 0, 1}) - std::acos(0.6)) < 1e-12);
+  }
+}
+
+// A rod with no interior point to align by (here: a 3-pixel rim left out of masks two or three
+// pixels wide; test seed 101's masks, eroded by a pixel, keep none either): track_object's
+// poses carry its first frame's axis along with the silhouettes' turns, and without them
+// (silhouette_turns false) leave it unturned. Measured, the carried axis off the true one, mean
+// over the later frames: 9.7 degrees, unturned 27.0. Bound: 0.6 of the unturned error (16.2).
+BOOST_AUTO_TEST_CASE(a_rod_too_thin_to_align_turns_with_its_silhouettes) {
+  const RodVideo video;
+  const std::vector<ObjectView> views = video.views(1);
+  const std::vector<Vec3> centres = video.centres();
+  const auto carried_error = [&](bool silhouettes) {
+    AlignmentOptions o;
+    o.edge_px = 3;
+    o.silhouette_turns = silhouettes;
+    const std::vector<Mat34> poses = track_object(views, centres, o);
+    const Vec3 first = video.axis(0);
+    double sum = 0;
+    for (size_t j = 1; j < poses.size(); ++j) {
+      const Mat3 a = rotation_of(poses[j]), b = rotation_of(poses[0]);
+      Vec3 carried{};  // a b^T first
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          for (int l = 0; l < 3; ++l) carried[r] += a[static_cast<size_t>(r * 3 + l)] * b[static_cast<size_t>(c * 3 + l)] * first[c];
+      sum += line_angle(carried, video.axis(j));
+    }
+    return sum / static_cast<double>(poses.size() - 1);
+  };
+  const double with = carried_error(true), without = carried_error(false);
+  BOOST_TEST_MESSAGE("carried axis off by " << with / kDegree << " degrees, unturned " << without / kDegree);
+  BOOST_TEST(with < 0.6 * without);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -9,8 +9,10 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <optional>
 
 #include "nova/runtime/error.hpp"
+#include "nova/train/silhouette_axis.hpp"
 #include "train/float_plane.hpp"
 #include "train/parallel_for.hpp"
 #include "train/square_min.hpp"
@@ -251,7 +253,7 @@ ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView&
   Aligner al(a, b, options);
   out.points = static_cast<int>(al.points());
   std::array<double, 6> q{0, 0, 0, translation[0], translation[1], translation[2]};
-  if (al.points() >= 8) {
+  if (al.points() >= kMinAlignmentPoints) {
     const double scale = b.rgb->width / 160.0;
     double cost = 0;
     for (double sigma : options.blur_px) {
@@ -306,14 +308,14 @@ double turn_of(const Mat34& m) { return std::acos(std::clamp((m[0] + m[5] + m[10
 
 // View a's object aligned to view b where b aligned back to a agrees (turns_agree), else the
 // anchors' shift alone.
-Mat34 consistent_step(const ObjectView& a, const ObjectView& b, const Vec3& shift, const AlignmentOptions& o) {
-  const Mat34 forward = align_object(a, b, shift, o).motion;
+ObjectAlignment consistent_step(const ObjectView& a, const ObjectView& b, const Vec3& shift, const AlignmentOptions& o) {
+  ObjectAlignment forward = align_object(a, b, shift, o);
   if (!(o.consistency > 0)) return forward;
   const Mat34 backward = align_object(b, a, Vec3{-shift[0], -shift[1], -shift[2]}, o).motion;
-  if (turns_agree(forward, backward, o)) return forward;
-  Mat34 m = kIdentity;
-  for (size_t d = 0; d < 3; ++d) m[d * 4 + 3] = shift[d];
-  return m;
+  if (turns_agree(forward.motion, backward, o)) return forward;
+  forward.motion = kIdentity;
+  for (size_t d = 0; d < 3; ++d) forward.motion[d * 4 + 3] = shift[d];
+  return forward;
 }
 
 }  // namespace
@@ -351,11 +353,18 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& given, const std:
   if (options.window <= 1) {
     // Each frame aligned to the one before alone: the pairs do not depend on each other's
     // poses, so they run at once and the poses are chained after.
-    std::vector<Mat34> step(views.size(), kIdentity);
+    std::vector<ObjectAlignment> step(views.size());
     detail::parallel_for(views.size() - 1, [&](size_t p) {
       step[p + 1] = consistent_step(views[p], views[p + 1], shift(p + 1), options);
     });
-    for (size_t j = 1; j < views.size(); ++j) poses.push_back(compose_rigid(step[j], poses[j - 1]));
+    // A pair too thin to align by its interior (a rod) turns as its silhouettes' axes do.
+    std::vector<std::optional<Vec3>> axes;
+    for (size_t j = 1; j < views.size(); ++j)
+      if (options.silhouette_turns && step[j].points < kMinAlignmentPoints) {
+        if (axes.empty()) axes = silhouette_axes(given, anchors);
+        if (axes[j - 1] && axes[j]) step[j].motion = turn_onto(*axes[j - 1], *axes[j], anchors[j - 1], anchors[j]);
+      }
+    for (size_t j = 1; j < views.size(); ++j) poses.push_back(compose_rigid(step[j].motion, poses[j - 1]));
     return poses;
   }
   for (size_t j = 1; j < views.size(); ++j) {

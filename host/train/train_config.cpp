@@ -265,6 +265,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(bool_option("align-depth-auto", "object-motion rigid: align-depth-reach 1 where less than 0.7 of the disparity's step falls at the objects' silhouettes (a disparity blurred over them), else 0; the run's config.ini holds the choice",
                           [](TrainConfig& c) -> bool& { return c.align_depth_auto; }));
   o.back().before = "false";
+  o.push_back(bool_option("align-silhouette", "object-motion rigid: a frame pair with too few interior pixels to align (a rod a few pixels wide) turns as its masks' principal axes do, the tilt out of the image read from the mask's length; false: the anchors' shift alone, unturned",
+                          [](TrainConfig& c) -> bool& { return c.align_silhouette; }));
+  o.back().before = "false";
   o.push_back(float_option("align-consistency", "object-motion rigid: each frame pair is also aligned back; a pair whose way back leaves more turn than this fraction of the turn found (and more than 3 degrees) takes no turn, as a symmetric object can give each direction a wrong turn of its own (0: no check)", 0.0, 100.0,
                            [](TrainConfig& c) -> float& { return c.align_consistency; }));
   o.back().before = "0";

@@ -47,7 +47,15 @@ struct AlignmentOptions {
   // alone (0: no check).
   double consistency = 0.0;
   double consistency_floor_deg = 3.0;
+  // track_object, window 1: a pair with too few interior points to align (a rod a few pixels
+  // wide) turns as its masks' principal axes do (silhouette_axis.hpp) instead of not at all.
+  // Off: on the family's thin rod it follows the axis and trains worse inside the object
+  // (docs/accuracy-studies.md, "Thin objects' turns from their silhouettes").
+  bool silhouette_turns = false;
 };
+
+// Fewer interior points than this give align_object no turn: the anchors' shift alone.
+inline constexpr int kMinAlignmentPoints = 8;
 
 // Whether an alignment of view a to view b (`forward`) and one of b back to a (`backward`)
 // undo each other's turn: the turn left after both, within options.consistency of the forward

@@ -44,6 +44,9 @@ struct TrainConfig : ModelConfig {
   // over the objects' silhouettes (silhouette_step_share below kBlurredStepShare), else 0;
   // chosen when the trainer is made, and the run's config.ini holds the choice.
   bool align_depth_auto = false;
+  // Rigid objects' start: a frame pair too thin to align by its interior (a rod) turns as its
+  // masks' principal axes do (AlignmentOptions::silhouette_turns; false: unturned).
+  bool align_silhouette = false;
   NovelViewLossWeights weights;
   // How the loss terms are normalised and rendered (losses.hpp): nova's own (quick) or the
   // public reference code's (reference); docs/training.md, "Loss conventions".
