@@ -4,6 +4,7 @@
 // scoring functions), and writes per-scene and per-set PSNR / SSIM / training time: a table,
 // OUT/accuracy.csv, OUT/accuracy.json, OUT/accuracy.png and OUT/pictures/SCENE.png. Built
 // only with nova_io (scenes, metrics, pictures).
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +23,7 @@
 #include "nova/train/progress_line.hpp"
 #include "nova/train/run_folder.hpp"
 #include "nova/runtime/runtime.hpp"
+#include "nova/train/motion_init.hpp"
 #include "nova/train/trainer.hpp"
 #include "nova/model/view_renderer.hpp"
 #include "family_truth.hpp"
@@ -188,7 +190,17 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
     std::optional<SynthWorld> world;  // outlives the training that calls the hook
     if (exact_motion) {
       world.emplace(p.spec.preset, p.spec.seed);
-      trainer.set_motion_start_hook([&](MotionStart& start) { start.rows = exact_motion_rows(scene, *world, start.rows); });
+      trainer.set_motion_start_hook([&](MotionStart& start) {
+        start.rows = exact_motion_rows(scene, *world, start.rows);
+        // Each box about the pivot of the rows it will be read with (the mean of their
+        // translations), not of the alignment's, which can lie a radius or more away.
+        const int F = static_cast<int>(scene.frames.size());
+        for (size_t k = 0; k < start.radii.size(); ++k) {
+          const std::array<float, 6> box = object_box_row(motion_pivot(start.rows.data() + k * size_t(F) * 6, F),
+                                                          kObjectBoxRadii * start.radii[k], trainer.geometry());
+          std::copy(box.begin(), box.end(), start.boxes.begin() + long(k) * 6);
+        }
+      });
       write_atomically(run_dir + "/" + kExactMotionMarker, "started from the generator's exact motion (nova-bench accuracy --exact-motion)\n");
     }
     trainer.run([](const TrainProgress& pr) { std::cerr << "  " << progress_line(pr) << "\n"; });

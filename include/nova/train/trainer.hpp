@@ -71,6 +71,9 @@ class Trainer {
   }
 
   long step() const { return step_; }
+  // The scene's ray geometry (NDC or metric, its box): what a motion start hook needs to place
+  // objects' boxes (object_box_row) for trajectories of its own.
+  const RayGeometry& geometry() const { return geometry_; }
   // Device bytes of the current phase's step: the planned activation arena, the parameters,
   // their gradients and Adam's two moments (0 before the first step).
   size_t device_bytes() const;
