@@ -139,6 +139,14 @@ Tensor motion_smoothness(Tensor motion, int frames) {
 
 // ---- host maps ----
 
+Mat3 axis_angle_to_matrix(const Vec3& w) {
+  const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  if (th < 1e-12) return {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const double x = w[0] / th, y = w[1] / th, z = w[2] / th, s = std::sin(th), c = std::cos(th), t = 1 - c;
+  return {t * x * x + c, t * x * y - s * z, t * x * z + s * y, t * x * y + s * z, t * y * y + c,
+          t * y * z - s * x, t * x * z - s * y, t * y * z + s * x, t * z * z + c};
+}
+
 Mat3 euler_xyz_to_matrix(const Vec3& a) {
   const double cx = std::cos(a[0]), sx = std::sin(a[0]);
   const double cy = std::cos(a[1]), sy = std::sin(a[1]);

@@ -22,14 +22,6 @@ namespace {
 
 constexpr Mat34 kIdentity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
 
-Mat3 rodrigues(const Vec3& w) {
-  const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-  if (th < 1e-12) return {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  const double x = w[0] / th, y = w[1] / th, z = w[2] / th, s = std::sin(th), c = std::cos(th), t = 1 - c;
-  return {t * x * x + c, t * x * y - s * z, t * x * z + s * y, t * x * y + s * z, t * y * y + c,
-          t * y * z - s * x, t * x * z - s * y, t * y * z + s * x, t * z * z + c};
-}
-
 struct Point {
   Vec3 x;
   std::array<double, 3> colour;
@@ -95,7 +87,7 @@ class Aligner {
 
   // The residuals of every point under parameters q (turn, translation): kResiduals per point.
   void residuals(const std::array<double, 6>& q, std::vector<double>& r) const {
-    const Mat3 R = rodrigues({q[0], q[1], q[2]});
+    const Mat3 R = axis_angle_to_matrix({q[0], q[1], q[2]});
     const Camera& cb = *b_.camera;
     r.assign(points_.size() * kResiduals, 0.0);
     for (size_t i = 0; i < points_.size(); ++i) {
@@ -262,7 +254,7 @@ ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView&
     }
     out.residual = cost / static_cast<double>(al.points());
   }
-  const Mat3 R = rodrigues({q[0], q[1], q[2]});
+  const Mat3 R = axis_angle_to_matrix({q[0], q[1], q[2]});
   const Vec3& c = al.centre();
   for (int k = 0; k < 3; ++k) {
     double t = c[k] + q[static_cast<size_t>(3 + k)];

@@ -22,13 +22,6 @@ Vec3 unit(const Vec3& a) {
   return n > 0 ? scaled(a, 1 / n) : a;
 }
 
-// The rotation by `angle` about the unit `axis` (Rodrigues).
-Mat3 rotation_about(const Vec3& axis, double angle) {
-  const double x = axis[0], y = axis[1], z = axis[2], s = std::sin(angle), c = std::cos(angle), t = 1 - c;
-  return {t * x * x + c,     t * x * y - s * z, t * x * z + s * y, t * x * y + s * z, t * y * y + c,
-          t * y * z - s * x, t * x * z - s * y, t * y * z + s * x, t * z * z + c};
-}
-
 Vec3 rotate(const Mat3& r, const Vec3& v) {
   return {r[0] * v[0] + r[1] * v[1] + r[2] * v[2], r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
           r[6] * v[0] + r[7] * v[1] + r[8] * v[2]};
@@ -39,7 +32,7 @@ Mat3 rotation_onto(const Vec3& from, const Vec3& to) {
   const Vec3 axis = cross(from, to);
   const double s = std::sqrt(dot(axis, axis)), c = dot(from, to);
   if (s < 1e-12) return {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  return rotation_about(scaled(axis, 1 / s), std::atan2(s, c));
+  return axis_angle_to_matrix(scaled(axis, std::atan2(s, c) / s));
 }
 
 }  // namespace

@@ -62,6 +62,9 @@ Mat3 euler_xyz_to_matrix(const Vec3& angles);
 // `near` (so that a trajectory's angles change smoothly).
 Vec3 matrix_to_euler_xyz(const Mat3& r, const Vec3& near);
 
+// The rotation by |w| radians about w / |w| (Rodrigues); the identity for w = 0.
+Mat3 axis_angle_to_matrix(const Vec3& w);
+
 // Rigid 3x4 maps: the inverse [R^T | -R^T t], a after b (x -> a(b(x))), and a point moved.
 Mat34 invert_rigid(const Mat34& m);
 Mat34 compose_rigid(const Mat34& a, const Mat34& b);
