@@ -104,6 +104,24 @@ BOOST_AUTO_TEST_CASE(rim_is_the_background_next_to_the_objects) {
   BOOST_TEST(rim_pixels(regions, kW, kH, 1).size() == 23u);
 }
 
+// background_apart: the background less the ring rim_pixels gives, in the background's order;
+// reach 0 keeps it whole.
+BOOST_AUTO_TEST_CASE(background_apart_leaves_out_the_ring) {
+  const std::vector<Image8> m = masks();
+  const auto regions = pixel_regions(m);
+  BOOST_TEST(background_apart(regions, kW, kH, 0) == regions[0]);
+  for (int reach : {1, 2, 5}) {
+    const std::vector<uint32_t> rim = rim_pixels(regions, kW, kH, reach);
+    const std::set<uint32_t> ring(rim.begin(), rim.end());
+    std::vector<uint32_t> want;
+    for (uint32_t p : regions[0])
+      if (!ring.count(p)) want.push_back(p);
+    const std::vector<uint32_t> got = background_apart(regions, kW, kH, reach);
+    BOOST_TEST(got == want, "reach " << reach);
+    BOOST_TEST(got.size() + rim.size() == regions[0].size(), "reach " << reach);
+  }
+}
+
 // With RimRays the background's first share of rays lies in the ring, the rest anywhere in
 // the background; the objects' rays are drawn as before; no objects, no ring.
 BOOST_AUTO_TEST_CASE(rim_rays_come_from_the_ring) {

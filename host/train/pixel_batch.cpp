@@ -45,6 +45,24 @@ std::vector<uint32_t> rim_pixels(const std::vector<std::vector<uint32_t>>& regio
   return rim;
 }
 
+std::vector<uint32_t> background_apart(const std::vector<std::vector<uint32_t>>& regions, int width, int height,
+                                       int reach) {
+  if (reach <= 0 || regions.empty()) return regions.empty() ? std::vector<uint32_t>{} : regions[0];
+  // rim_pixels keeps regions[0]'s order, so one merge pass leaves out its pixels.
+  const std::vector<uint32_t> rim = rim_pixels(regions, width, height, reach);
+  std::vector<uint32_t> kept;
+  kept.reserve(regions[0].size() - rim.size());
+  size_t r = 0;
+  for (uint32_t p : regions[0]) {
+    if (r < rim.size() && rim[r] == p) {
+      ++r;
+      continue;
+    }
+    kept.push_back(p);
+  }
+  return kept;
+}
+
 PixelBatch draw_pixels(const Image8& rgb, const std::vector<Image8>& masks,
                        const std::vector<std::vector<uint32_t>>& regions, int rays, std::mt19937& rng,
                        const RimRays& rim_rays) {

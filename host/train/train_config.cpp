@@ -259,6 +259,9 @@ std::vector<ConfigOption> make_options() {
   o.back().before = "0";
   o.push_back(float_option("rim-width", "rim-rays: the ring's width as a fraction of the image width (at least one pixel)", 0.0, 0.5,
                            [](TrainConfig& c) -> float& { return c.rim_width; }));
+  o.push_back(float_option("background-gap", "background pixels within this many pixels (at 160 px width, scaled with the image) of an object's mask are drawn neither in pretraining nor in joint steps that are not augmented: a mask that misses its object's edge by a pixel or two would teach the static NeRF the object's rim as background (0: every background pixel)", 0.0, 64.0,
+                           [](TrainConfig& c) -> float& { return c.background_gap; }));
+  o.back().before = "0";
   o.push_back(float_option("align-depth-reach", "object-motion rigid: before the frames' alignment each mask pixel's depth becomes the nearest of the mask's within this many pixels (at 160 px width, scaled with the image), undoing a disparity blurred over the object's rim (0: as given)", 0.0, 64.0,
                            [](TrainConfig& c) -> float& { return c.align_depth_reach; }));
   o.back().before = "0";

@@ -52,6 +52,12 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   if (ec) throw Error("cannot create run folder '" + run_.dir() + "': " + ec.message());
   regions_.reserve(scene.frames.size());
   for (const Frame& f : scene.frames) regions_.push_back(pixel_regions(f.masks));
+  if (config_.background_gap > 0)
+    for (size_t i = 0; i < regions_.size(); ++i) {
+      const int width = scene.frames[i].rgb.width;
+      const int reach = std::max(1, static_cast<int>(std::lround(config_.background_gap * width / 160.0f)));
+      regions_[i][0] = background_apart(regions_[i], width, scene.frames[i].rgb.height, reach);
+    }
   // Pretraining draws background pixels (those no object mask claims): some frame must have one.
   if (config_.pretrain_steps > 0 &&
       std::all_of(regions_.begin(), regions_.end(), [](const auto& r) { return r[0].empty(); }))

@@ -32,6 +32,13 @@ std::vector<std::vector<uint32_t>> pixel_regions(const std::vector<Image8>& mask
 std::vector<uint32_t> rim_pixels(const std::vector<std::vector<uint32_t>>& regions, int width, int height,
                                  int reach);
 
+// The background (regions[0]) less its pixels within `reach` of an object's pixel
+// (rim_pixels), in its order: a mask that misses its object's edge by a pixel or two (eroded,
+// or a segmentation's soft border) would otherwise teach the static NeRF the object's rim as
+// background along the object's path. reach 0: regions[0] as it is.
+std::vector<uint32_t> background_apart(const std::vector<std::vector<uint32_t>>& regions, int width, int height,
+                                       int reach);
+
 // Where the background's rays come from. Spread evenly over a frame, they rarely fall just
 // outside a small object, where an object NeRF's density spread past its silhouette shows
 // as a haze: `share` of them are drawn from the ring rim_pixels(regions, ..., reach) instead

@@ -37,6 +37,10 @@ struct TrainConfig : ModelConfig {
   // within rim_width (a fraction of the image width) of an object's mask (pixel_batch.hpp).
   float rim_rays = 0.0f;
   float rim_width = 0.03f;
+  // Background pixels within this many pixels (at 160 px width, scaled with the image) of an
+  // object's mask are not drawn in pretraining and in joint steps that are not augmented
+  // (pixel_batch.hpp, background_apart; 0: every background pixel).
+  float background_gap = 0.0f;
   // Rigid objects' start (AlignmentOptions::depth_reach_px, ::consistency; 0: off).
   float align_depth_reach = 0.0f;
   float align_consistency = 0.0f;
