@@ -196,8 +196,8 @@ Evaluated train_and_evaluate(Runtime& rt, const Planned& p, const std::string& r
         // translations), not of the alignment's, which can lie a radius or more away.
         const int F = static_cast<int>(scene.frames.size());
         for (size_t k = 0; k < start.radii.size(); ++k) {
-          const std::array<float, 6> box = object_box_row(motion_pivot(start.rows.data() + k * size_t(F) * 6, F),
-                                                          kObjectBoxRadii * start.radii[k], trainer.geometry());
+          const std::array<float, 6> box =
+              object_box_for(start.rows.data() + k * size_t(F) * 6, F, start.radii[k], trainer.geometry());
           std::copy(box.begin(), box.end(), start.boxes.begin() + long(k) * 6);
         }
       });

@@ -125,6 +125,10 @@ std::array<float, 6> object_box_row(const Vec3& centre, double half, const RayGe
   return row;
 }
 
+std::array<float, 6> object_box_for(const float* rows, int frames, double radius, const RayGeometry& geo) {
+  return object_box_row(motion_pivot(rows, frames), kObjectBoxRadii * radius, geo);
+}
+
 double mask_radius(const Image8& mask, const Camera& camera, const Vec3& anchor) {
   double cx = 0, cy = 0, n = 0;
   for (int y = 0; y < mask.height; ++y)
@@ -343,7 +347,7 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
     const std::vector<MotionRow> all = fill_motion_rows(known, known_rows, F);
     for (int i = 0; i < F; ++i)
       for (int d = 0; d < 6; ++d) r[static_cast<size_t>(i) * 6 + d] = static_cast<float>(all[static_cast<size_t>(i)][static_cast<size_t>(d)]);
-    const std::array<float, 6> box = object_box_row(motion_pivot(r, F), kObjectBoxRadii * radius, geo);
+    const std::array<float, 6> box = object_box_for(r, F, radius, geo);
     std::copy(box.begin(), box.end(), boxes.begin() + static_cast<long>(k - 1) * 6);
     object_radii[static_cast<size_t>(k - 1)] = static_cast<float>(radius);
   });

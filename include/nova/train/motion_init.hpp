@@ -48,6 +48,11 @@ MotionStart initial_motion(Runtime& rt, const Scene& scene, const RayGeometry& g
 // than the scene's box (RayGeometry::box; a metric scene's extent).
 std::array<float, 6> object_box_row(const Vec3& centre, double half, const RayGeometry& geo);
 
+// One object's box for its trajectory `rows` ([frames, 6]) and radius (world units): the cube
+// of half-size kObjectBoxRadii radii about the rows' pivot (motion_pivot), where the canonical
+// field finds the object. Whoever replaces a start's rows places the boxes again with it.
+std::array<float, 6> object_box_for(const float* rows, int frames, double radius, const RayGeometry& geo);
+
 // An object's radius in world units as one frame's mask shows it: the 95th percentile of its
 // pixels' distances from their centroid, at the anchor's distance from the camera. 0 for an
 // empty mask.
