@@ -25,6 +25,7 @@
 #include "nova/runtime/error.hpp"
 #include "nova/graph/executor.hpp"
 #include "nova/sampling/occupancy.hpp"
+#include "nova/model/occupancy_estimator.hpp"
 #include "nova/ops/linalg/dense.hpp"
 #include "nova/ops/tensor/tensor_ops.hpp"
 #include "nova/ops/encoding/positional_encoding.hpp"
@@ -165,6 +166,41 @@ BOOST_AUTO_TEST_CASE(grid_geometry_and_update) {
   g.update({4}, {0.0f}, 0.5f);  // 0.75 x threshold
   g.refresh();
   BOOST_TEST(!g.occupied[4]);
+}
+
+// A rigid object's box bounds its grid (object-box-bounded): the cells that do not meet the
+// box are empty whatever their density, and a point beyond the grid clamps into such a cell.
+BOOST_AUTO_TEST_CASE(a_support_box_empties_the_cells_outside_it) {
+  OccupancyGrid g(8, 2.0f, 0.05f);  // cells 0.5 wide
+  g.set_support({-0.3f, -0.3f, 0.6f, 0.3f, 0.3f, 1.1f});
+  // Two cells per axis meet the box: [-0.5, 0] and [0, 0.5] in x and y, [0.5, 1] and [1, 1.5] in z.
+  BOOST_TEST(g.occupied_fraction() == 8.0 / 512.0);
+  const float inside[3] = {0.1f, -0.2f, 0.9f}, beside[3] = {0.1f, -0.2f, -1.0f}, beyond[3] = {0.0f, 0.0f, 9.0f};
+  BOOST_TEST(g.occupied[g.cell_of(inside)]);
+  BOOST_TEST(!g.occupied[g.cell_of(beside)]);
+  BOOST_TEST(!g.occupied[g.cell_of(beyond)]);
+  // Density everywhere leaves the support as it is, and a cell in it follows its density.
+  std::vector<size_t> all(g.cells());
+  for (size_t c = 0; c < all.size(); ++c) all[c] = c;
+  g.update(all, std::vector<float>(all.size(), 10 * g.threshold()), 0.5f);
+  g.update({g.cell_of(inside)}, {0.0f}, 0.0f);
+  g.refresh();
+  BOOST_TEST(g.occupied_fraction() == 7.0 / 512.0);
+  BOOST_TEST(!g.occupied[g.cell_of(inside)]);
+  BOOST_TEST(!g.occupied[g.cell_of(beside)]);
+  g.set_support({});
+  BOOST_TEST(g.occupied_fraction() == 511.0 / 512.0);
+
+  // The estimator bounds each object's grid by its objects.box row (centre, -log half-size)
+  // and leaves the static NeRF's grid whole.
+  OccupancyEstimator est(1, 8, 2.0f, 0.05f);
+  est.bound_objects({0.0f, 0.0f, 0.85f, -std::log(0.3f), -std::log(0.3f), -std::log(0.25f)}, 0.0f);
+  BOOST_TEST(est.grid(0).occupied_fraction() == 1.0);
+  BOOST_TEST(est.grid(1).occupied_fraction() == 8.0 / 512.0);
+  BOOST_TEST(est.grid(1).support[2] == 0.6f, boost::test_tools::tolerance(1e-6f));
+  est.bound_objects({0.0f, 0.0f, 0.85f, -std::log(0.3f), -std::log(0.3f), -std::log(0.25f)}, 0.25f);
+  BOOST_TEST(est.grid(1).occupied_fraction() == 4.0 * 4.0 * 3.0 / 512.0);  // x, y in [-0.55, 0.55]; z in [0.35, 1.35]
+  BOOST_CHECK_THROW(est.bound_objects({0.0f}, 0.0f), Error);
 }
 
 BOOST_AUTO_TEST_CASE(pack_gather_scatter_match_reference) {

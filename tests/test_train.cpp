@@ -482,6 +482,71 @@ BOOST_AUTO_TEST_CASE(rigid_objects_start_at_their_masks) {
   }
 }
 
+// object-box-bounded: once the joint phase starts, each object's occupancy grid holds no
+// occupied cell outside its box (the fraction a grid bounded by the checkpoint's box has,
+// below 1 on this scene), and a resumed run bounds its grids the same way.
+BOOST_AUTO_TEST_CASE(bounded_object_boxes_bound_the_occupancy_grids) {
+  const Scene scene = tiny_scene();
+  TempDir dir("bounded");
+  TrainConfig c = tiny_config(Encoding::HashGrid);
+  c.field.motion = ObjectMotion::Rigid;
+  c.field.object_box = true;
+  c.field.object_box_bounded = true;
+  c.occupancy = true;
+  c.pretrain_steps = 20;
+  c.steps = 4;
+  c.log_every = 1;
+  c.checkpoint_every = 2;
+  std::vector<TrainProgress> log;
+  {
+    Trainer t(runtime(), scene, c, (dir / "run").string());
+    t.run([&](const TrainProgress& p) { log.push_back(p); }, c.pretrain_steps + 2);
+  }
+  Trainer resumed(runtime(), scene, c, (dir / "run").string());
+  resumed.resume();
+  resumed.run([&](const TrainProgress& p) { log.push_back(p); });
+  const Checkpoint ck = resumed.checkpoint();
+  const std::vector<float>& boxes = ck.array(kObjectBoxName).values;
+  const int K = scene.num_objects;
+  BOOST_REQUIRE(boxes.size() == static_cast<size_t>(K * 6));
+  const float bound = scene_field(c.field, ray_geometry(scene)).occupancy_bound;
+  size_t joint = 0;
+  for (const TrainProgress& p : log) {
+    if (p.phase != "joint") continue;
+    ++joint;
+    BOOST_REQUIRE(p.occupied.size() == static_cast<size_t>(K + 1));
+    for (int k = 1; k <= K; ++k) {
+      OccupancyGrid g(c.occupancy_res, bound, c.occupancy_alpha);
+      const float* b = boxes.data() + (k - 1) * 6;
+      std::vector<float> support(6);
+      for (size_t d = 0; d < 3; ++d) {
+        support[d] = b[d] - std::exp(-b[3 + d]);
+        support[3 + d] = b[d] + std::exp(-b[3 + d]);
+      }
+      g.set_support(support);
+      // Before the grids' warm-up every cell in the box counts as occupied.
+      BOOST_TEST(g.occupied_fraction() < 1.0, "object " << k);
+      BOOST_TEST(p.occupied[static_cast<size_t>(k)] == g.occupied_fraction(), "object " << k << " at step " << p.step);
+    }
+  }
+  BOOST_TEST(joint == 4u);  // two joint steps before the resume, two after
+  // A renderer of the run bounds the saved grids too: it runs fewer object samples than one
+  // that reads the same checkpoint unbounded.
+  size_t evaluated[2] = {0, 0};
+  for (bool bounded : {false, true}) {
+    TrainConfig rc = c;
+    rc.field.object_box_bounded = bounded;
+    ViewRenderer r(runtime(), rc, ray_geometry(scene), ck);
+    ViewRequest req;
+    req.camera = scene.frames[0].camera;
+    req.instances = scene_instances(K, scene.frames[0].time);
+    r.render(req);
+    evaluated[bounded] = r.last_stats().evaluated;
+  }
+  BOOST_TEST_MESSAGE("field evaluations of frame 0: " << evaluated[0] << " unbounded, " << evaluated[1] << " bounded");
+  BOOST_TEST(evaluated[1] < evaluated[0]);
+}
+
 // The reference code's conventions end to end (plain pretraining, then joint steps with the
 // per-NeRF own targets on augmented steps, the L1 mask, area RGB, outside alpha and order
 // terms): every logged loss is finite, the order term is there, and the run resumes

@@ -77,6 +77,24 @@ void OccupancyEstimator::enable_updates(Runtime& rt, const FieldConfig& field, c
   updater_.reset(new Updater{rt, field, geometry, std::move(times), points, nullptr, nullptr, false});
 }
 
+void OccupancyEstimator::bound_objects(const std::vector<float>& boxes, float margin) {
+  std::vector<OccupancyGrid>& gs = *grids_;
+  if (boxes.size() != 6 * (gs.size() - 1))
+    throw Error("occupancy: " + std::to_string(boxes.size()) + " box numbers for " + std::to_string(gs.size() - 1) +
+                    " objects",
+                kExitInternal);
+  for (size_t k = 1; k < gs.size(); ++k) {
+    const float* b = boxes.data() + (k - 1) * 6;
+    std::vector<float> support(6);
+    for (size_t d = 0; d < 3; ++d) {
+      const float half = std::exp(-b[3 + d]) + margin;
+      support[d] = b[d] - half;
+      support[3 + d] = b[d] + half;
+    }
+    gs[k].set_support(std::move(support));
+  }
+}
+
 void OccupancyEstimator::maybe_update(Executor& source, long phase_step, bool objects, unsigned seed, long step) {
   if (!updater_ || phase_step < schedule_.warmup) return;
   const long since = phase_step - schedule_.warmup;

@@ -53,9 +53,28 @@ void OccupancyGrid::update(const std::vector<size_t>& cells, const std::vector<f
   }
 }
 
+void OccupancyGrid::set_support(std::vector<float> box) {
+  if (!box.empty() && box.size() != 6) throw Error("occupancy grid: a support box takes 6 numbers", kExitInternal);
+  support = std::move(box);
+  refresh();
+}
+
 void OccupancyGrid::refresh() {
   const float t = threshold();
   for (size_t i = 0; i < density.size(); ++i) occupied[i] = density[i] < 0.0f || density[i] > t;
+  if (support.size() == 6) {
+    const size_t g = static_cast<size_t>(resolution);
+    const float h = cell_size();
+    // Per axis, which cell indices meet [lo, hi].
+    std::vector<uint8_t> meets(3 * g, 0);
+    for (size_t d = 0; d < 3; ++d)
+      for (size_t i = 0; i < g; ++i) {
+        const float lo = -bound + static_cast<float>(i) * h, hi = lo + h;
+        meets[d * g + i] = hi >= support[d] && lo <= support[3 + d];
+      }
+    for (size_t c = 0; c < occupied.size(); ++c)
+      if (!(meets[c % g] && meets[g + (c / g) % g] && meets[2 * g + c / (g * g)])) occupied[c] = 0;
+  }
   generation = next_generation();
 }
 

@@ -250,6 +250,9 @@ std::vector<ConfigOption> make_options() {
   o.push_back(bool_option("object-box", "object-motion rigid: each canonical field encodes a box of its own around its object, sized from the masks and the disparity, instead of the scene's box, so the grid's cells are sized by the object (object-motion none turns it off)",
                           [](TrainConfig& c) -> bool& { return c.field.object_box; }));
   o.back().before = "false";
+  o.push_back(bool_option("object-box-bounded", "object-box, occupancy: an object NeRF has no density outside its box (those samples never reach its MLP); false: a point beyond the box reads the box's face",
+                          [](TrainConfig& c) -> bool& { return c.field.object_box_bounded; }));
+  o.back().before = "false";
   // After object-motion too, which turns it off.
   o.push_back(int_option("object-samples", "object-motion rigid, forward-facing scenes: of each ray's samples, how many crowd into the depths within two radii of where each object stands at the view's time, shared evenly by the objects (0: every sample evenly spread; metric scenes always spread them; object-motion none turns it off)", 0, 1023,
                          [](TrainConfig& c) -> int& { return c.object_samples; }));

@@ -188,6 +188,7 @@ void Trainer::ensure_phase(bool joint) {
       if (p.info().name == kObjectBoxName) e->set(p, start.boxes);
       if (p.info().name == kObjectRadiusName) e->set(p, start.radii);
     }
+    bound_objects(start.boxes);
   }
   exec_.reset();
   graph_ = std::move(g);
@@ -351,6 +352,11 @@ Checkpoint Trainer::checkpoint() {
   return ck;
 }
 
+void Trainer::bound_objects(const std::vector<float>& boxes) {
+  if (occupancy_ && config_.field.object_box_bounded)
+    occupancy_->bound_objects(boxes, object_box_margin(config_.field));
+}
+
 void Trainer::write_checkpoint_now() { write_checkpoint(run_.checkpoint_path(), checkpoint()); }
 
 void Trainer::resume() {
@@ -379,6 +385,7 @@ void Trainer::resume() {
     const CheckpointArray& a = ck.array(p.info().name);
     if (a.shape != p.shape().dims) throw mismatch("parameter '" + a.name + "' has another shape");
     exec_->set(p, a.values);
+    if (p.info().name == kObjectBoxName) bound_objects(a.values);
   }
   const CheckpointArray& m = ck.array("adam.m");
   const CheckpointArray& v = ck.array("adam.v");

@@ -83,6 +83,11 @@ struct FieldConfig {
   // scene's box a small object spans a few cells, and in NDC fewer still in depth, which a
   // turning object shows sideways as blur.
   bool object_box = false;
+  // With object_box and empty-space skipping: an object NeRF has no density outside its box
+  // (its occupancy grid holds no occupied cell there, so those samples never reach its MLP).
+  // Otherwise a point beyond the box reads the features of the box's face, and density
+  // there extends along every ray that leaves the box.
+  bool object_box_bounded = false;
   // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
   // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
   ObjectMotion motion = ObjectMotion::None;
@@ -111,6 +116,9 @@ Tensor build_object_fields(Tensor positions, Tensor times, const FieldConfig& co
 
 // The name of the object boxes' parameter ([K, 6] or [6]; box_coordinates' rows).
 inline const char* const kObjectBoxName = "objects.box";
+// How far past its box an object NeRF's samples may reach (object_box_bounded): a deformation
+// moves a sample by up to deform_bound before the canonical field reads it.
+inline float object_box_margin(const FieldConfig& c) { return c.deform_width > 0 ? c.deform_bound : 0.0f; }
 
 // Parameter name prefixes, for checkpoints and the inference renderer.
 inline const std::string kStaticPrefix = "static.";

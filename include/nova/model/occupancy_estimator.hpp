@@ -43,6 +43,10 @@ class OccupancyEstimator {
                       OccupancySchedule schedule, int points = 16384);
   void maybe_update(Executor& source, long phase_step, bool objects, unsigned seed, long step);
 
+  // Object NeRF k's grid holds no occupied cell outside its box (object-box-bounded):
+  // `boxes` [K * 6] are the rows of the objects.box parameter (centre, log of the inverse
+  // half-size; box_coordinates), widened by `margin` (field units) on every side.
+  void bound_objects(const std::vector<float>& boxes, float margin);
   // The grids' densities as checkpoint arrays, and back (the grids' sizes must match).
   void save(Checkpoint& ck) const;
   void restore(const Checkpoint& ck);

@@ -31,6 +31,10 @@ struct OccupancyGrid {
   float alpha = 0.01f;          // opacity over one cell that counts as occupied
   std::vector<float> density;   // G^3, x fastest; < 0: never evaluated (occupied)
   std::vector<uint8_t> occupied;
+  // Where the field is defined at all (lo x, y, z, hi x, y, z; empty: the whole grid): a
+  // cell that does not meet this box is empty whatever its density, and so is a point
+  // beyond the grid that clamps into such a cell (a rigid object's box, object-box-bounded).
+  std::vector<float> support;
   // Changes (to a value no grid had before) whenever `occupied` is recomputed: the pack op
   // copies the cells to the device again only when a grid's generation moves. Change
   // `density` or `occupied` only through update() + refresh().
@@ -47,7 +51,9 @@ struct OccupancyGrid {
   void point_in(size_t c, const float* u, float* p) const;
   // Folds new densities at cells into the grid: d = max(decay * d, new).
   void update(const std::vector<size_t>& cells, const std::vector<float>& densities, float decay);
-  // Recomputes `occupied` from `density`, and takes a new generation.
+  // Sets `support` (6 floats, or empty for none) and refreshes.
+  void set_support(std::vector<float> box);
+  // Recomputes `occupied` from `density` and `support`, and takes a new generation.
   void refresh();
   double occupied_fraction() const;
 };

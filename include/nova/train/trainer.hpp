@@ -88,6 +88,8 @@ class Trainer {
   void ensure_phase(bool joint);  // that phase's graph and executor
   void train_step(bool log, TrainProgress& p);
   void write_checkpoint_now();
+  // object-box-bounded: the objects' occupancy grids end at their boxes (rows of objects.box).
+  void bound_objects(const std::vector<float>& boxes);
   void write_config();
   void maybe_update_occupancy(long phase_step);
 
