@@ -530,6 +530,17 @@ BOOST_AUTO_TEST_CASE(bounded_object_boxes_bound_the_occupancy_grids) {
     }
   }
   BOOST_TEST(joint == 4u);  // two joint steps before the resume, two after
+  // Without a box of its own the canonical field spans the scene's box: nothing is bounded.
+  {
+    TrainConfig sc = c;
+    sc.field.object_box = false;
+    sc.steps = 1;
+    std::vector<TrainProgress> plain;
+    Trainer t(runtime(), scene, sc, (dir / "scene_box").string());
+    t.run([&](const TrainProgress& p) { plain.push_back(p); });
+    BOOST_REQUIRE(plain.back().phase == "joint");
+    for (int k = 1; k <= K; ++k) BOOST_TEST(plain.back().occupied.at(static_cast<size_t>(k)) == 1.0);
+  }
   // A renderer of the run bounds the saved grids too: it runs fewer object samples than one
   // that reads the same checkpoint unbounded.
   size_t evaluated[2] = {0, 0};

@@ -159,7 +159,7 @@ ViewRenderer::ViewRenderer(Runtime& rt, const ModelConfig& config, const RayGeom
   if (config.occupancy) {
     saved_ = OccupancyEstimator::from_checkpoint(checkpoint, geometry.num_objects,
                                                  scene_field(config.field, geometry).occupancy_bound, config.occupancy_alpha);
-    if (saved_ && config.field.object_box_bounded && geometry.num_objects > 0)
+    if (saved_ && config.field.object_box && config.field.object_box_bounded && geometry.num_objects > 0)
       saved_->bound_objects(checkpoint.array(kObjectBoxName).values, object_box_margin(config.field));
     if (saved_) grids_ = saved_grids_ = saved_->grids();
   }

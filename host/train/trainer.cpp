@@ -353,7 +353,7 @@ Checkpoint Trainer::checkpoint() {
 }
 
 void Trainer::bound_objects(const std::vector<float>& boxes) {
-  if (occupancy_ && config_.field.object_box_bounded)
+  if (occupancy_ && config_.field.object_box && config_.field.object_box_bounded)
     occupancy_->bound_objects(boxes, object_box_margin(config_.field));
 }
 

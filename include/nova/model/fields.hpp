@@ -83,10 +83,10 @@ struct FieldConfig {
   // scene's box a small object spans a few cells, and in NDC fewer still in depth, which a
   // turning object shows sideways as blur.
   bool object_box = false;
-  // With object_box and empty-space skipping: an object NeRF has no density outside its box
-  // (its occupancy grid holds no occupied cell there, so those samples never reach its MLP).
-  // Otherwise a point beyond the box reads the features of the box's face, and density
-  // there extends along every ray that leaves the box.
+  // With object_box and empty-space skipping (inert without either): an object NeRF has no
+  // density outside its box (its occupancy grid holds no occupied cell there, so those
+  // samples never reach its MLP). Otherwise a point beyond the box reads the features of the
+  // box's face, and density there extends along every ray that leaves the box.
   bool object_box_bounded = false;
   // How an object NeRF sees time: the paper's field of (x, y, z, t), or one canonical shape of
   // (x, y, z) moved by a learned rigid motion per frame (motion.hpp).
