@@ -11,6 +11,7 @@
 #include "train/float_plane.hpp"
 #include "train/parallel_for.hpp"
 #include "train/percentile.hpp"
+#include "train/reference_width.hpp"
 
 namespace nova {
 namespace {
@@ -24,7 +25,7 @@ struct Sample {
 class ProjectionCost {
  public:
   ProjectionCost(const Scene& scene, const DisparityFitOptions& o) : scene_(scene), o_(o) {
-    const double scale = scene.frames.empty() ? 1.0 : scene.frames[0].rgb.width / 160.0;
+    const double scale = scene.frames.empty() ? 1.0 : detail::reference_scale(scene.frames[0].rgb.width);
     for (const Frame& f : scene.frames) planes_.push_back(blurred_plane(f.rgb, o.blur_px * scale));
     for (size_t i = 0; i < scene.frames.size(); ++i) pick_samples(static_cast<int>(i));
   }

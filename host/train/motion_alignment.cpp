@@ -15,6 +15,7 @@
 #include "nova/train/silhouette_axis.hpp"
 #include "train/float_plane.hpp"
 #include "train/parallel_for.hpp"
+#include "train/reference_width.hpp"
 #include "train/square_min.hpp"
 
 namespace nova {
@@ -246,7 +247,7 @@ ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView&
   out.points = static_cast<int>(al.points());
   std::array<double, 6> q{0, 0, 0, translation[0], translation[1], translation[2]};
   if (al.points() >= kMinAlignmentPoints) {
-    const double scale = b.rgb->width / 160.0;
+    const double scale = detail::reference_scale(b.rgb->width);
     double cost = 0;
     for (double sigma : options.blur_px) {
       al.level(sigma * scale);
@@ -328,7 +329,7 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& given, const std:
   if (options.depth_reach_px > 0) {
     nearest.resize(given.size());
     detail::parallel_for(given.size(), [&](size_t i) {
-      const int reach = static_cast<int>(std::lround(options.depth_reach_px * given[i].rgb->width / 160.0));
+      const int reach = static_cast<int>(std::lround(options.depth_reach_px * detail::reference_scale(given[i].rgb->width)));
       nearest[i] = nearest_depth_within(*given[i].depth, *given[i].mask, reach);
     });
     for (size_t i = 0; i < views.size(); ++i) views[i].depth = &nearest[i];

@@ -12,6 +12,7 @@
 #include "nova/train/motion_init.hpp"
 #include "nova/train/pixel_batch.hpp"
 #include "train/metrics_log.hpp"
+#include "train/reference_width.hpp"
 #include "train/step_batch.hpp"
 #include "nova/sampling/rays.hpp"
 
@@ -55,7 +56,7 @@ Trainer::Trainer(Runtime& rt, const Scene& scene, const TrainConfig& config, std
   if (config_.background_gap > 0)
     for (size_t i = 0; i < regions_.size(); ++i) {
       const int width = scene.frames[i].rgb.width;
-      const int reach = std::max(1, static_cast<int>(std::lround(config_.background_gap * width / 160.0f)));
+      const int reach = std::max(1, static_cast<int>(std::lround(config_.background_gap * detail::reference_scale(width))));
       regions_[i][0] = background_apart(regions_[i], width, scene.frames[i].rgb.height, reach);
     }
   // Pretraining draws background pixels (those no object mask claims): some frame must have one.
