@@ -223,7 +223,7 @@ std::vector<ObjectScore> score_seed(int seed, const std::string& dir, bool exact
 }  // namespace
 
 int motion(const Args& args) {
-  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"depth-reach", "0"}, {"consistency", "0"}, {"depth-auto", "off"}, {"made-masks", "off"}, {"silhouette", "off"}});
+  const Options o(args, {{"seeds", "1,2,3,4"}, {"exact-depth", "off"}, {"runs", ""}, {"window", std::to_string(AlignmentOptions{}.window)}, {"edge", std::to_string(AlignmentOptions{}.edge_px)}, {"depth-reach", "0"}, {"consistency", "0"}, {"depth-auto", "off"}, {"made-masks", "off"}, {"silhouette", "off"}, {"bridge", "0"}});
   if (o.help()) {
     std::cout << o.usage("motion") << "\n--seeds: family seeds; --exact-depth: place the objects' pixels at the "
                  "renders' exact depth instead of the fitted disparity; --runs DIR: also score the trained "
@@ -235,7 +235,9 @@ int motion(const Args& args) {
                  "step share (the column) is under 0.7, as nova train --align-depth-auto; --made-masks: track the objects "
                  "in the masks nova masks makes instead of the given ones (each true object by the made one that "
                  "shares the most pixels with it); --silhouette: a pair too thin to align by its interior turns as its "
-                 "masks' principal axes do instead of not at all (nova train --align-silhouette true)\n";
+                 "masks' principal axes do instead of not at all (nova train --align-silhouette true); --bridge R: a pair "
+                 "left with more than R times the median pair's residual, or too few points to align, takes its reliable "
+                 "neighbours' turn (nova train --align-bridge; default 0: its own)\n";
     return 0;
   }
   const std::string runs = o.str("runs");
@@ -255,6 +257,7 @@ int motion(const Args& args) {
   };
   number("depth-reach", 64, options.depth_reach_px);
   number("consistency", 100, options.consistency);
+  number("bridge", 1000, options.bridge_ratio);
   options.silhouette_turns = o.flag("silhouette");
   ScratchDir scratch("motion");
   std::printf("%5s %7s %6s %12s %11s %11s %18s %8s", "seed", "object", "pairs", "true deg/fr", "error mean",

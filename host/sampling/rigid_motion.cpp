@@ -147,6 +147,24 @@ Mat3 axis_angle_to_matrix(const Vec3& w) {
           t * y * z - s * x, t * x * z - s * y, t * y * z + s * x, t * z * z + c};
 }
 
+Vec3 matrix_to_axis_angle(const Mat3& r) {
+  // The angle from its cosine and sine together: acos alone loses half the digits near 0 and pi.
+  const Vec3 skew{r[7] - r[5], r[2] - r[6], r[3] - r[1]};  // 2 sin(th) times the axis
+  const double s = 0.5 * std::sqrt(skew[0] * skew[0] + skew[1] * skew[1] + skew[2] * skew[2]);
+  const double c = (r[0] + r[4] + r[8] - 1) / 2, th = std::atan2(s, c);
+  if (s > 1e-4) return {th * skew[0] / (2 * s), th * skew[1] / (2 * s), th * skew[2] / (2 * s)};
+  if (c > 0) return {skew[0] / 2, skew[1] / 2, skew[2] / 2};  // th < 1e-4: sin(th) = th to 1e-12
+  // Near pi the skew part vanishes: the axis from the symmetric part, (R + R^T) / 2 - c I =
+  // (1 - c) a a^T (its largest column), its sign from what is left of the skew part.
+  const int k = r[0] >= r[4] && r[0] >= r[8] ? 0 : (r[4] >= r[8] ? 1 : 2);
+  Vec3 a{};
+  for (int i = 0; i < 3; ++i)
+    a[static_cast<size_t>(i)] = (r[static_cast<size_t>(i * 3 + k)] + r[static_cast<size_t>(k * 3 + i)]) / 2 - (i == k ? c : 0.0);
+  const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  const double sign = a[0] * skew[0] + a[1] * skew[1] + a[2] * skew[2] < 0 ? -1.0 : 1.0;
+  return {sign * th * a[0] / n, sign * th * a[1] / n, sign * th * a[2] / n};
+}
+
 Mat3 euler_xyz_to_matrix(const Vec3& a) {
   const double cx = std::cos(a[0]), sx = std::sin(a[0]);
   const double cy = std::cos(a[1]), sy = std::sin(a[1]);

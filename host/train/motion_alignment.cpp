@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "nova/runtime/error.hpp"
 #include "nova/train/silhouette_axis.hpp"
@@ -137,8 +138,9 @@ class Aligner {
   double prior_weight() const { return o_.turn_prior * static_cast<double>(points_.size()); }
   double prior(const std::array<double, 6>& q) const { return prior_weight() * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]); }
 
-  // Levenberg-Marquardt at the current level from q; returns the final cost.
-  double optimise(std::array<double, 6>& q, int iterations) const {
+  // Levenberg-Marquardt at the current level from q; returns the final cost. With `hold_turn`
+  // only the translation moves.
+  double optimise(std::array<double, 6>& q, int iterations, bool hold_turn) const {
     std::vector<double> r, w, rp, rm;
     std::vector<double> J;
     double lambda = 1e-3;
@@ -170,6 +172,11 @@ class Aligner {
       for (int a = 0; a < 3; ++a) {
         A[static_cast<size_t>(a * 7)] += pw;
         g[static_cast<size_t>(a)] -= pw * q[static_cast<size_t>(a)];
+        if (hold_turn) {  // the turn's rows and columns out of the system: d = 0 there
+          for (int b = 0; b < 6; ++b) A[static_cast<size_t>(a * 6 + b)] = A[static_cast<size_t>(b * 6 + a)] = 0;
+          A[static_cast<size_t>(a * 7)] = 1;
+          g[static_cast<size_t>(a)] = 0;
+        }
       }
       bool improved = false;
       for (int tries = 0; tries < 6 && !improved; ++tries) {
@@ -237,21 +244,20 @@ class Aligner {
   FloatPlane rgb_, mask_;
 };
 
-}  // namespace
-
-ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView& b, const Vec3& translation,
-                             const AlignmentOptions& options) {
+// align_object from the turn `start_turn` (axis-angle), held there with `hold_turn`.
+ObjectAlignment align_views(const std::vector<PlacedView>& a, const ObjectView& b, const Vec3& translation,
+                            const AlignmentOptions& options, const Vec3& start_turn, bool hold_turn) {
   ObjectAlignment out;
   if (a.empty()) return out;
   Aligner al(a, b, options);
   out.points = static_cast<int>(al.points());
-  std::array<double, 6> q{0, 0, 0, translation[0], translation[1], translation[2]};
+  std::array<double, 6> q{start_turn[0], start_turn[1], start_turn[2], translation[0], translation[1], translation[2]};
   if (al.points() >= kMinAlignmentPoints) {
     const double scale = detail::reference_scale(b.rgb->width);
     double cost = 0;
     for (double sigma : options.blur_px) {
       al.level(sigma * scale);
-      cost = al.optimise(q, options.iterations);
+      cost = al.optimise(q, options.iterations, hold_turn);
     }
     out.residual = cost / static_cast<double>(al.points());
   }
@@ -267,6 +273,13 @@ ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView&
   }
   out.turn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
   return out;
+}
+
+}  // namespace
+
+ObjectAlignment align_object(const std::vector<PlacedView>& a, const ObjectView& b, const Vec3& translation,
+                             const AlignmentOptions& options) {
+  return align_views(a, b, translation, options, {0, 0, 0}, false);
 }
 
 ObjectAlignment align_object(const ObjectView& a, const ObjectView& b, const Vec3& translation,
@@ -311,6 +324,56 @@ ObjectAlignment consistent_step(const ObjectView& a, const ObjectView& b, const 
   return forward;
 }
 
+// The pairs that did not align reliably (AlignmentOptions::bridge_ratio) with the turn their
+// reliable neighbours give them (axis-angle); `fixed` pairs (turned by their silhouettes) are
+// kept. Pairs that keep their own turn are not listed.
+std::vector<std::pair<size_t, Vec3>> bridged_turns(const std::vector<ObjectAlignment>& step, const std::vector<bool>& fixed,
+                                                   double ratio) {
+  std::vector<double> costs;
+  for (size_t j = 1; j < step.size(); ++j)
+    if (step[j].points >= kMinAlignmentPoints) costs.push_back(step[j].residual);
+  if (costs.size() < 3) return {};  // too few pairs to say what a good one leaves
+  std::nth_element(costs.begin(), costs.begin() + static_cast<long>(costs.size() / 2), costs.end());
+  const double limit = ratio * costs[costs.size() / 2];
+  std::vector<bool> reliable(step.size(), false);
+  std::vector<Vec3> turn(step.size());
+  for (size_t j = 1; j < step.size(); ++j) {
+    reliable[j] = fixed[j] || (step[j].points >= kMinAlignmentPoints && step[j].residual <= limit);
+    const Mat34& m = step[j].motion;
+    if (reliable[j]) turn[j] = matrix_to_axis_angle({m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]});
+  }
+  std::vector<std::pair<size_t, Vec3>> out;
+  for (size_t j = 1; j < step.size(); ++j) {
+    if (reliable[j]) continue;
+    size_t before = j, after = j;
+    while (before > 1 && !reliable[before]) --before;
+    while (after + 1 < step.size() && !reliable[after]) ++after;
+    const bool has_before = reliable[before] && before < j, has_after = reliable[after] && after > j;
+    if (!has_before && !has_after) continue;
+    Vec3 w{};
+    const double f = has_before && has_after ? static_cast<double>(j - before) / static_cast<double>(after - before) : 0.0;
+    for (size_t d = 0; d < 3; ++d)
+      w[d] = !has_after ? turn[before][d] : !has_before ? turn[after][d] : (1 - f) * turn[before][d] + f * turn[after][d];
+    out.emplace_back(j, w);
+  }
+  return out;
+}
+
+// The rigid map that turns by `w` about `from` and carries it onto `to`.
+Mat34 turn_about(const Vec3& w, const Vec3& from, const Vec3& to) {
+  const Mat3 r = axis_angle_to_matrix(w);
+  Mat34 m{};
+  for (size_t k = 0; k < 3; ++k) {
+    double t = to[k];
+    for (size_t i = 0; i < 3; ++i) {
+      m[k * 4 + i] = r[k * 3 + i];
+      t -= r[k * 3 + i] * from[i];
+    }
+    m[k * 4 + 3] = t;
+  }
+  return m;
+}
+
 }  // namespace
 
 bool turns_agree(const Mat34& forward, const Mat34& backward, const AlignmentOptions& options) {
@@ -352,11 +415,26 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& given, const std:
     });
     // A pair too thin to align by its interior (a rod) turns as its silhouettes' axes do.
     std::vector<std::optional<Vec3>> axes;
+    std::vector<bool> by_silhouette(views.size(), false);
     for (size_t j = 1; j < views.size(); ++j)
       if (options.silhouette_turns && step[j].points < kMinAlignmentPoints) {
         if (axes.empty()) axes = silhouette_axes(given, anchors);
-        if (axes[j - 1] && axes[j]) step[j].motion = turn_onto(*axes[j - 1], *axes[j], anchors[j - 1], anchors[j]);
+        if (axes[j - 1] && axes[j]) {
+          step[j].motion = turn_onto(*axes[j - 1], *axes[j], anchors[j - 1], anchors[j]);
+          by_silhouette[j] = true;
+        }
       }
+    // A pair that aligned badly takes its neighbours' turn and, where it has the points, the
+    // translation that best aligns it under that turn (else the anchors' shift).
+    if (options.bridge_ratio > 0) {
+      const std::vector<std::pair<size_t, Vec3>> bridged = bridged_turns(step, by_silhouette, options.bridge_ratio);
+      detail::parallel_for(bridged.size(), [&](size_t i) {
+        const auto& [j, w] = bridged[i];
+        step[j].motion = step[j].points >= kMinAlignmentPoints
+                             ? align_views({{views[j - 1], kIdentity}}, views[j], shift(j), options, w, true).motion
+                             : turn_about(w, anchors[j - 1], anchors[j]);
+      });
+    }
     for (size_t j = 1; j < views.size(); ++j) poses.push_back(compose_rigid(step[j].motion, poses[j - 1]));
     return poses;
   }

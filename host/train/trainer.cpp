@@ -175,6 +175,7 @@ void Trainer::ensure_phase(bool joint) {
     AlignmentOptions align;
     align.depth_reach_px = config_.align_depth_reach;
     align.consistency = config_.align_consistency;
+    align.bridge_ratio = config_.align_bridge;
     align.silhouette_turns = config_.align_silhouette;
     MotionStart start = initial_motion(rt_, scene_, geometry_, config_.field, config_.samples, exec_ ? *exec_ : *e,
                                        disparity_fit_ ? &*disparity_fit_ : nullptr, align);

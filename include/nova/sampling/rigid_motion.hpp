@@ -64,6 +64,8 @@ Vec3 matrix_to_euler_xyz(const Mat3& r, const Vec3& near);
 
 // The rotation by |w| radians about w / |w| (Rodrigues); the identity for w = 0.
 Mat3 axis_angle_to_matrix(const Vec3& w);
+// Its inverse for a rotation matrix: w with |w| in [0, pi] (at pi either of the two axes).
+Vec3 matrix_to_axis_angle(const Mat3& r);
 
 // Rigid 3x4 maps: the inverse [R^T | -R^T t], a after b (x -> a(b(x))), and a point moved.
 Mat34 invert_rigid(const Mat34& m);

@@ -41,9 +41,10 @@ struct TrainConfig : ModelConfig {
   // object's mask are not drawn in pretraining and in joint steps that are not augmented
   // (pixel_batch.hpp, background_apart; 0: every background pixel).
   float background_gap = 0.0f;
-  // Rigid objects' start (AlignmentOptions::depth_reach_px, ::consistency; 0: off).
+  // Rigid objects' start (AlignmentOptions::depth_reach_px, ::consistency, ::bridge_ratio; 0: off).
   float align_depth_reach = 0.0f;
   float align_consistency = 0.0f;
+  float align_bridge = 0.0f;
   // Rigid objects' start: align_depth_reach becomes 1 where the scene's disparity is blurred
   // over the objects' silhouettes (silhouette_step_share below kBlurredStepShare), else 0;
   // chosen when the trainer is made, and the run's config.ini holds the choice.
