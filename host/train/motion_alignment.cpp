@@ -324,9 +324,9 @@ ObjectAlignment consistent_step(const ObjectView& a, const ObjectView& b, const 
   return forward;
 }
 
-// The pairs that did not align reliably (AlignmentOptions::bridge_ratio) with the turn their
-// reliable neighbours give them (axis-angle); `fixed` pairs (turned by their silhouettes) are
-// kept. Pairs that keep their own turn are not listed.
+// The pairs that did not align reliably (AlignmentOptions::bridge_ratio) between two that did,
+// each with the turn interpolated from those two (axis-angle); `fixed` pairs (turned by their
+// silhouettes) count as reliable. Pairs that keep their own turn are not listed.
 std::vector<std::pair<size_t, Vec3>> bridged_turns(const std::vector<ObjectAlignment>& step, const std::vector<bool>& fixed,
                                                    double ratio) {
   std::vector<double> costs;
@@ -343,17 +343,15 @@ std::vector<std::pair<size_t, Vec3>> bridged_turns(const std::vector<ObjectAlign
     if (reliable[j]) turn[j] = matrix_to_axis_angle({m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]});
   }
   std::vector<std::pair<size_t, Vec3>> out;
-  for (size_t j = 1; j < step.size(); ++j) {
+  for (size_t j = 2; j + 1 < step.size(); ++j) {
     if (reliable[j]) continue;
-    size_t before = j, after = j;
+    size_t before = j - 1, after = j + 1;
     while (before > 1 && !reliable[before]) --before;
     while (after + 1 < step.size() && !reliable[after]) ++after;
-    const bool has_before = reliable[before] && before < j, has_after = reliable[after] && after > j;
-    if (!has_before && !has_after) continue;
+    if (!reliable[before] || !reliable[after]) continue;  // at an end of the video: its own
+    const double f = static_cast<double>(j - before) / static_cast<double>(after - before);
     Vec3 w{};
-    const double f = has_before && has_after ? static_cast<double>(j - before) / static_cast<double>(after - before) : 0.0;
-    for (size_t d = 0; d < 3; ++d)
-      w[d] = !has_after ? turn[before][d] : !has_before ? turn[after][d] : (1 - f) * turn[before][d] + f * turn[after][d];
+    for (size_t d = 0; d < 3; ++d) w[d] = (1 - f) * turn[before][d] + f * turn[after][d];
     out.emplace_back(j, w);
   }
   return out;

@@ -55,13 +55,16 @@ struct AlignmentOptions {
   // track_object, window 1: a pair whose alignment ends with a mean residual above this many
   // times the median of the object's aligned pairs, or that has too few interior points to
   // align, takes the turn of the nearest reliable pairs before and after it (interpolated in
-  // axis-angle; the nearer one's alone at either end) and the translation that aligns it best
-  // under that turn (the anchors' shift where it has too few points). A spin seldom changes
-  // its rate within a frame, and a pair that aligns badly (a symmetric object settling in
-  // another of its looks, a view cut by the border) is more often wrong than the spin is
-  // irregular. On the family's dev objects the pairs within 6 degrees of the true turn end at
-  // most 1.9 times the median (one 4.2) and 14 of the 25 pairs further off at 6 to 59 times
-  // (the rest, 6-9 degrees off under a blurred disparity, end as the good ones do). 0: off.
+  // axis-angle) and the translation that aligns it best under that turn (the anchors' shift
+  // where it has too few points). A spin seldom changes its rate within a frame, and a pair
+  // that aligns badly (a symmetric object settling in another of its looks) is more often
+  // wrong than the spin is irregular. Pairs at either end of the video, with a reliable pair
+  // on one side only, keep their own: there the object enters or leaves the view, cut by the
+  // border, and a turn carried on from the inner pairs trained worse objects than the pair's
+  // own (docs/accuracy-studies.md). On the family's dev objects the pairs within 6 degrees of
+  // the true turn end at most 1.9 times the median (one 4.2) and 14 of the 25 pairs further
+  // off at 6 to 59 times (the rest, 6-9 degrees off under a blurred disparity, end as the
+  // good ones do). 0: off.
   double bridge_ratio = 0.0;
 };
 
