@@ -277,7 +277,7 @@ std::vector<ConfigOption> make_options() {
   o.push_back(float_option("align-consistency", "object-motion rigid: each frame pair is also aligned back; a pair whose way back leaves more turn than this fraction of the turn found (and more than 3 degrees) takes no turn, as a symmetric object can give each direction a wrong turn of its own (0: no check)", 0.0, 100.0,
                            [](TrainConfig& c) -> float& { return c.align_consistency; }));
   o.back().before = "0";
-  o.push_back(float_option("align-bridge", "object-motion rigid: a frame pair whose alignment leaves more than this many times the median pair's residual, or too few interior pixels to align, takes the turn of the nearest reliable pairs before and after it, interpolated (0: its own)", 0.0, 1000.0,
+  o.push_back(float_option("align-bridge", "object-motion rigid: a frame pair whose alignment leaves more than this many times the median pair's residual, or too few interior pixels to align, between two pairs that aligned well, takes their interpolated turn and a translation aligned under it (0: every pair its own)", 0.0, 1000.0,
                            [](TrainConfig& c) -> float& { return c.align_bridge; }));
   o.back().before = "0";
   o.push_back(float_option("w-motion-smooth", "object-motion rigid: weight of the trajectories' smoothness (second differences of the per-frame motion)", 0.0, 1e6,
