@@ -422,8 +422,9 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& given, const std:
           by_silhouette[j] = true;
         }
       }
-    // A pair that aligned badly takes its neighbours' turn and, where it has the points, the
-    // translation that best aligns it under that turn (else the anchors' shift).
+    // A pair that aligned badly between two that aligned well takes their turn and, where it
+    // has the points, the translation that best aligns it under that turn (else the anchors'
+    // shift).
     if (options.bridge_ratio > 0) {
       const std::vector<std::pair<size_t, Vec3>> bridged = bridged_turns(step, by_silhouette, options.bridge_ratio);
       detail::parallel_for(bridged.size(), [&](size_t i) {
