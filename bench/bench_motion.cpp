@@ -236,8 +236,8 @@ int motion(const Args& args) {
                  "in the masks nova masks makes instead of the given ones (each true object by the made one that "
                  "shares the most pixels with it); --silhouette: a pair too thin to align by its interior turns as its "
                  "masks' principal axes do instead of not at all (nova train --align-silhouette true); --bridge R: a pair "
-                 "left with more than R times the median pair's residual, or too few points to align, takes its reliable "
-                 "neighbours' turn (nova train --align-bridge; default 0: its own)\n";
+                 "left with more than R times the median pair's residual, or too few points to align, between two that "
+                 "aligned well, takes their interpolated turn (nova train --align-bridge; default 0: its own)\n";
     return 0;
   }
   const std::string runs = o.str("runs");

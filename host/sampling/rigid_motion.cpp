@@ -206,6 +206,19 @@ Mat34 invert_rigid(const Mat34& m) {
   return r;
 }
 
+Mat34 rigid_about(const Mat3& r, const Vec3& pivot, const Vec3& destination) {
+  Mat34 m{};
+  for (size_t k = 0; k < 3; ++k) {
+    double t = destination[k];
+    for (size_t i = 0; i < 3; ++i) {
+      m[k * 4 + i] = r[k * 3 + i];
+      t -= r[k * 3 + i] * pivot[i];
+    }
+    m[k * 4 + 3] = t;
+  }
+  return m;
+}
+
 Mat34 compose_rigid(const Mat34& a, const Mat34& b) {
   Mat34 out{};
   for (size_t r = 0; r < 3; ++r) {

@@ -261,16 +261,8 @@ ObjectAlignment align_views(const std::vector<PlacedView>& a, const ObjectView& 
     }
     out.residual = cost / static_cast<double>(al.points());
   }
-  const Mat3 R = axis_angle_to_matrix({q[0], q[1], q[2]});
   const Vec3& c = al.centre();
-  for (int k = 0; k < 3; ++k) {
-    double t = c[k] + q[static_cast<size_t>(3 + k)];
-    for (int j = 0; j < 3; ++j) {
-      out.motion[static_cast<size_t>(k * 4 + j)] = R[static_cast<size_t>(k * 3 + j)];
-      t -= R[static_cast<size_t>(k * 3 + j)] * c[j];
-    }
-    out.motion[static_cast<size_t>(k * 4 + 3)] = t;
-  }
+  out.motion = rigid_about(axis_angle_to_matrix({q[0], q[1], q[2]}), c, {c[0] + q[3], c[1] + q[4], c[2] + q[5]});
   out.turn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
   return out;
 }
@@ -357,21 +349,6 @@ std::vector<std::pair<size_t, Vec3>> bridged_turns(const std::vector<ObjectAlign
   return out;
 }
 
-// The rigid map that turns by `w` about `from` and carries it onto `to`.
-Mat34 turn_about(const Vec3& w, const Vec3& from, const Vec3& to) {
-  const Mat3 r = axis_angle_to_matrix(w);
-  Mat34 m{};
-  for (size_t k = 0; k < 3; ++k) {
-    double t = to[k];
-    for (size_t i = 0; i < 3; ++i) {
-      m[k * 4 + i] = r[k * 3 + i];
-      t -= r[k * 3 + i] * from[i];
-    }
-    m[k * 4 + 3] = t;
-  }
-  return m;
-}
-
 }  // namespace
 
 bool turns_agree(const Mat34& forward, const Mat34& backward, const AlignmentOptions& options) {
@@ -431,7 +408,7 @@ std::vector<Mat34> track_object(const std::vector<ObjectView>& given, const std:
         const auto& [j, w] = bridged[i];
         step[j].motion = step[j].points >= kMinAlignmentPoints
                              ? align_views({{views[j - 1], kIdentity}}, views[j], shift(j), options, w, true).motion
-                             : turn_about(w, anchors[j - 1], anchors[j]);
+                             : rigid_about(axis_angle_to_matrix(w), anchors[j - 1], anchors[j]);
       });
     }
     for (size_t j = 1; j < views.size(); ++j) poses.push_back(compose_rigid(step[j].motion, poses[j - 1]));

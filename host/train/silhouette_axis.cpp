@@ -6,6 +6,7 @@
 #include <cstddef>
 
 #include "nova/sampling/camera.hpp"
+#include "nova/sampling/rigid_motion.hpp"
 
 namespace nova {
 namespace {
@@ -131,10 +132,7 @@ std::vector<std::optional<Vec3>> silhouette_axes(const std::vector<ObjectView>& 
 Mat34 turn_onto(const Vec3& from, const Vec3& to, const Vec3& pivot, const Vec3& destination) {
   // A rod and its reverse are one rod: the smaller of the two turns.
   const Vec3 target = dot(from, to) < 0 ? scaled(to, -1) : to;
-  const Mat3 r = rotation_onto(unit(from), unit(target));
-  const Vec3 moved = rotate(r, pivot);
-  return {r[0], r[1], r[2], destination[0] - moved[0], r[3], r[4], r[5], destination[1] - moved[1],
-          r[6], r[7], r[8], destination[2] - moved[2]};
+  return rigid_about(rotation_onto(unit(from), unit(target)), pivot, destination);
 }
 
 }  // namespace nova

@@ -67,6 +67,9 @@ Mat3 axis_angle_to_matrix(const Vec3& w);
 // Its inverse for a rotation matrix: w with |w| in [0, pi] (at pi either of the two axes).
 Vec3 matrix_to_axis_angle(const Mat3& r);
 
+// The rigid map that turns by `r` about `pivot` and carries the pivot onto `destination`.
+Mat34 rigid_about(const Mat3& r, const Vec3& pivot, const Vec3& destination);
+
 // Rigid 3x4 maps: the inverse [R^T | -R^T t], a after b (x -> a(b(x))), and a point moved.
 Mat34 invert_rigid(const Mat34& m);
 Mat34 compose_rigid(const Mat34& a, const Mat34& b);
